@@ -1,0 +1,15 @@
+//! mirage: inverse design of atmospheric mirages.
+//!
+//! Data flows one way: problem file → parameters ([`medium::LogisticMedium`]) →
+//! compiled medium ([`medium::IndexField`]) → rays ([`trace`]) → residuals →
+//! solver → fitted medium → images.
+
+#![warn(missing_docs)]
+
+pub mod app;
+pub mod error;
+pub mod io;
+pub mod math;
+pub mod medium;
+pub mod pair;
+pub mod trace;

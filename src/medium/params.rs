@@ -1,0 +1,163 @@
+//! Parameter path names: one vocabulary for files, the fitter and the reports.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// A field of a hot spot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum HotField {
+    /// Centre, x (metres).
+    X,
+    /// Centre, z (metres).
+    Z,
+    /// Radius (metres).
+    Radius,
+    /// Strength (amplitude).
+    N,
+    /// Vertical rate (metres).
+    A,
+    /// Rim sharpness (1/metre).
+    Edge,
+}
+
+impl HotField {
+    /// All fields, in the order parameters are listed.
+    pub const ALL: [HotField; 6] = [
+        HotField::X,
+        HotField::Z,
+        HotField::Radius,
+        HotField::N,
+        HotField::A,
+        HotField::Edge,
+    ];
+
+    /// The name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            HotField::X => "x",
+            HotField::Z => "z",
+            HotField::Radius => "radius",
+            HotField::N => "n",
+            HotField::A => "a",
+            HotField::Edge => "edge",
+        }
+    }
+}
+
+/// A parameter of the logistic medium, addressed by its path name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Param {
+    /// `scale`: k_s.
+    Scale,
+    /// `background.n`.
+    BackgroundN,
+    /// `background.a`.
+    BackgroundA,
+    /// `inversion.n`.
+    InversionN,
+    /// `inversion.a`.
+    InversionA,
+    /// `inversion.height`.
+    InversionHeight,
+    /// `hotspots[j].<field>`.
+    Hot(usize, HotField),
+}
+
+impl Param {
+    /// Whether this parameter is an amplitude (n_bg, n_inv, n_hot_j): the
+    /// amplitudes share the model's gauge freedom.
+    pub fn is_amplitude(self) -> bool {
+        matches!(
+            self,
+            Param::BackgroundN | Param::InversionN | Param::Hot(_, HotField::N)
+        )
+    }
+}
+
+impl fmt::Display for Param {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Param::Scale => f.write_str("scale"),
+            Param::BackgroundN => f.write_str("background.n"),
+            Param::BackgroundA => f.write_str("background.a"),
+            Param::InversionN => f.write_str("inversion.n"),
+            Param::InversionA => f.write_str("inversion.a"),
+            Param::InversionHeight => f.write_str("inversion.height"),
+            Param::Hot(j, field) => write!(f, "hotspots[{j}].{}", field.name()),
+        }
+    }
+}
+
+/// A name that is not the path of any parameter of the model.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "`{0}` is not a parameter name (expected e.g. `scale`, `background.a`, `inversion.height`, `hotspots[0].radius`)"
+)]
+pub struct ParamParseError(pub String);
+
+impl FromStr for Param {
+    type Err = ParamParseError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let err = || ParamParseError(s.to_string());
+        Ok(match s {
+            "scale" => Param::Scale,
+            "background.n" => Param::BackgroundN,
+            "background.a" => Param::BackgroundA,
+            "inversion.n" => Param::InversionN,
+            "inversion.a" => Param::InversionA,
+            "inversion.height" => Param::InversionHeight,
+            _ => {
+                let rest = s.strip_prefix("hotspots[").ok_or_else(err)?;
+                let (index, field) = rest.split_once("].").ok_or_else(err)?;
+                if index.is_empty() || !index.bytes().all(|b| b.is_ascii_digit()) {
+                    return Err(err());
+                }
+                let j: usize = index.parse().map_err(|_| err())?;
+                let field = HotField::ALL
+                    .into_iter()
+                    .find(|f| f.name() == field)
+                    .ok_or_else(err)?;
+                Param::Hot(j, field)
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        let mut all = vec![
+            Param::Scale,
+            Param::BackgroundN,
+            Param::BackgroundA,
+            Param::InversionN,
+            Param::InversionA,
+            Param::InversionHeight,
+        ];
+        all.extend(HotField::ALL.map(|f| Param::Hot(12, f)));
+        for p in all {
+            assert_eq!(p.to_string().parse::<Param>(), Ok(p));
+        }
+    }
+
+    #[test]
+    fn malformed_names_are_rejected() {
+        for bad in [
+            "",
+            "Scale",
+            "inversion.heigth",
+            "hotspots[].x",
+            "hotspots[-1].x",
+            "hotspots[0]x",
+            "hotspots[0].colour",
+            "hotspots[+1].x",
+            "hotspots[99999999999999999999999].x",
+        ] {
+            assert!(bad.parse::<Param>().is_err(), "{bad:?} accepted");
+        }
+    }
+}

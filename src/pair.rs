@@ -1,0 +1,118 @@
+//! Point pairs: "an observer at `origin` who looks toward `through` must see
+//! `target`", and the residual that measures how far the air is from that.
+
+use crate::math::{Real, V3};
+use crate::medium::IndexField;
+use crate::trace::{RayState, TargetPlane, Trace, TraceOptions, trace};
+use serde::{Deserialize, Serialize};
+
+/// One point pair, as written in a problem file.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointPair {
+    /// The observer (metres).
+    pub origin: [f64; 3],
+    /// A point on the line of sight, which fixes the launch direction.
+    pub through: [f64; 3],
+    /// The point the observer must see.
+    pub target: [f64; 3],
+    /// Weight of this pair's residual (default 1).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn is_one(w: &f64) -> bool {
+    *w == 1.0
+}
+
+/// Why a pair is invalid: (field, message).
+pub type PairError = (&'static str, String);
+
+impl PointPair {
+    /// Checks the pair's geometry: finite coordinates, `through` ≠ `origin`, the
+    /// target not straight above or below the origin, a non-negative weight.
+    pub fn validate(&self) -> Result<(), PairError> {
+        for (name, v) in [
+            ("origin", self.origin),
+            ("through", self.through),
+            ("target", self.target),
+        ] {
+            if v.iter().any(|c| !c.is_finite()) {
+                return Err((
+                    name,
+                    format!("coordinates must be finite numbers, got {v:?}"),
+                ));
+            }
+        }
+        if !self.weight.is_finite() || self.weight < 0.0 {
+            return Err((
+                "weight",
+                format!("must be a finite number ≥ 0, got {}", self.weight),
+            ));
+        }
+        let o = V3::from(self.origin);
+        if (V3::from(self.through) - o).norm() == 0.0 {
+            return Err((
+                "through",
+                "equals `origin`, so there is no direction to look in".to_string(),
+            ));
+        }
+        let d = V3::from(self.target) - o;
+        if d.x.hypot(d.z) == 0.0 {
+            return Err((
+                "target",
+                "is straight above or below `origin`: the target plane (facing the observer) is undefined".to_string(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The observer's position.
+    pub fn origin(&self) -> V3 {
+        V3::from(self.origin)
+    }
+
+    /// The target point.
+    pub fn target(&self) -> V3 {
+        V3::from(self.target)
+    }
+
+    /// Unit launch direction, normalize(through − origin).
+    pub fn direction(&self) -> V3 {
+        (V3::from(self.through) - self.origin()).normalized()
+    }
+
+    /// The plane through the target that faces the observer: its normal is the
+    /// horizontal part of target − origin.
+    pub fn plane(&self) -> TargetPlane {
+        let d = self.target() - self.origin();
+        TargetPlane {
+            point: self.target(),
+            normal: V3::new(d.x, 0.0, d.z).normalized(),
+        }
+    }
+
+    /// Traces this pair's ray and returns its trace and residual
+    /// `r = w·(e − target)`.
+    pub fn evaluate<T: Real, F: IndexField<T> + ?Sized>(
+        &self,
+        field: &F,
+        options: &TraceOptions,
+        path: Option<&mut Vec<RayState>>,
+    ) -> (Trace<T>, V3<T>) {
+        let plane = self.plane();
+        let t = trace(
+            field,
+            self.origin(),
+            self.direction(),
+            Some(&plane),
+            options,
+            path,
+        );
+        let r = (t.endpoint - self.target().lift()) * T::cst(self.weight);
+        (t, r)
+    }
+}

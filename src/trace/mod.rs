@@ -1,0 +1,356 @@
+//! Rays through the medium: the ray equation integrated by RK4 or Dormand–Prince
+//! 5(4), with events located inside the step that contains them.
+//!
+//! The tracer integrates the τ form of the ray equation (see [`state`]); the
+//! endpoint on a target plane is where the quintic Hermite interpolant of the
+//! crossing step meets the plane, so its error is the integrator's, not O(step).
+//!
+//! Everything is generic over [`Real`]: traced with dual numbers, the same code
+//! returns the exact derivative of the discrete endpoint map (see `fit`).
+
+pub mod hermite;
+pub mod state;
+mod stepper;
+
+pub use hermite::Segment;
+pub use state::{RayRate, RayState};
+pub use stepper::Method;
+
+use crate::math::{Real, V3};
+use crate::medium::IndexField;
+use hermite::bracketed_root;
+use serde::Serialize;
+use stepper::{Attempt, Stepper};
+
+/// What happens when a ray reaches the ground (y = 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GroundMode {
+    /// Flag the ray as occluded and go on: the medium is defined below ground, so
+    /// the endpoint map stays smooth for fitting.
+    #[default]
+    Flag,
+    /// Stop at the ground (rendering).
+    Stop,
+}
+
+/// Settings of one trace.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraceOptions {
+    /// Integrator and its accuracy.
+    pub method: Method,
+    /// Largest arc length (metres); `None`: 4 × the distance to the target.
+    pub max_length: Option<f64>,
+    /// Behaviour at the ground.
+    pub ground: GroundMode,
+    /// Hard cap on integration steps (accepted + rejected), against runaway.
+    pub max_steps: u64,
+}
+
+impl TraceOptions {
+    /// Options for a method with the default limits.
+    pub fn new(method: Method) -> Self {
+        TraceOptions {
+            method,
+            max_length: None,
+            ground: GroundMode::Flag,
+            max_steps: 10_000_000,
+        }
+    }
+}
+
+/// The plane a ray must reach: through `point`, with unit `normal` pointing away
+/// from the observer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TargetPlane {
+    /// A point of the plane (the pair's target).
+    pub point: V3,
+    /// Unit normal, horizontal for point pairs.
+    pub normal: V3,
+}
+
+impl TargetPlane {
+    /// Signed distance of `x` past the plane (negative on the observer's side).
+    #[inline]
+    pub fn signed_distance<T: Real>(&self, x: V3<T>) -> T {
+        (x - self.point.lift()).dot(self.normal.lift())
+    }
+}
+
+/// Why a trace ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum End {
+    /// It crossed the target plane.
+    Plane,
+    /// It reached the ground, in [`GroundMode::Stop`].
+    Ground,
+    /// It travelled `max_length` without reaching the plane.
+    MaxLength,
+    /// The step limit was hit, or the adaptive step underflowed.
+    StepLimit,
+}
+
+/// Integration statistics of one trace.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Stats {
+    /// Right-hand-side (index and gradient) evaluations.
+    pub rhs_evaluations: u64,
+    /// Accepted steps.
+    pub accepted_steps: u64,
+    /// Rejected steps (adaptive method only).
+    pub rejected_steps: u64,
+}
+
+impl std::ops::AddAssign for Stats {
+    fn add_assign(&mut self, o: Stats) {
+        self.rhs_evaluations += o.rhs_evaluations;
+        self.accepted_steps += o.accepted_steps;
+        self.rejected_steps += o.rejected_steps;
+    }
+}
+
+/// The result of tracing one ray.
+#[derive(Clone, Debug)]
+pub struct Trace<T = f64> {
+    /// Where the ray ended: on the target plane, on the ground (stop mode), or,
+    /// if it never reached the plane, the traced point nearest to it.
+    pub endpoint: V3<T>,
+    /// Unit tangent at the endpoint.
+    pub direction: V3,
+    /// Arc length travelled (metres).
+    pub arc_length: f64,
+    /// Why the trace ended.
+    pub end: End,
+    /// The ray went below y = 0 before its end.
+    pub occluded: bool,
+    /// A target plane was given and the ray did not reach it.
+    pub unreachable: bool,
+    /// Integration statistics.
+    pub stats: Stats,
+}
+
+/// Traces the ray from `origin` along the unit vector `direction` until it
+/// crosses `target` (if given), reaches the ground in [`GroundMode::Stop`], or
+/// travels the maximum length. If `path` is given, the start and every step's end
+/// are appended to it (for plots); nothing is allocated otherwise.
+pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
+    field: &F,
+    origin: V3,
+    direction: V3,
+    target: Option<&TargetPlane>,
+    options: &TraceOptions,
+    mut path: Option<&mut Vec<RayState>>,
+) -> Trace<T> {
+    let max_length = match (options.max_length, target) {
+        (Some(l), _) => l,
+        (None, Some(t)) => 4.0 * (t.point - origin).norm(),
+        (None, None) => f64::INFINITY,
+    };
+    let mut stats = Stats::default();
+    let x0 = origin.lift::<T>();
+    let (delta0, _) = field.delta_gradient(x0);
+    let mut y = RayState {
+        x: x0,
+        v: direction.lift::<T>() * (delta0 + 1.0),
+        s: T::cst(0.0),
+    };
+    let mut f = state::rate(field, &y, &mut stats.rhs_evaluations);
+    let mut stepper = Stepper::new(options.method, max_length);
+    if let Some(p) = path.as_deref_mut() {
+        p.push(real_state(&y));
+    }
+
+    let plane_distance =
+        |x: V3<T>| target.map_or(f64::NEG_INFINITY, |t| t.signed_distance(x).val());
+    let mut occluded = origin.y < 0.0;
+    let mut nearest = (plane_distance(y.x).abs(), y);
+    let mut steps = 0u64;
+
+    let finish = |endpoint: V3<T>, v: V3, s: f64, end: End, occluded: bool, stats: Stats| Trace {
+        endpoint,
+        direction: v.normalized(),
+        arc_length: s,
+        end,
+        occluded,
+        unreachable: target.is_some() && end != End::Plane,
+        stats,
+    };
+
+    loop {
+        if steps >= options.max_steps {
+            let (_, best) = nearest;
+            return finish(
+                best.x,
+                best.v.val(),
+                best.s.val(),
+                End::StepLimit,
+                occluded,
+                stats,
+            );
+        }
+        steps += 1;
+        let (y1, f1, h) = match stepper.attempt(field, &y, &f, &mut stats.rhs_evaluations) {
+            Attempt::Accepted(y1, f1, h) => (y1, f1, h),
+            Attempt::Rejected => {
+                stats.rejected_steps += 1;
+                continue;
+            }
+            Attempt::Underflow => {
+                let (_, best) = nearest;
+                return finish(
+                    best.x,
+                    best.v.val(),
+                    best.s.val(),
+                    End::StepLimit,
+                    occluded,
+                    stats,
+                );
+            }
+        };
+        stats.accepted_steps += 1;
+        let seg = Segment {
+            y0: y,
+            f0: f,
+            y1,
+            f1,
+            h,
+        };
+        let real = seg.val();
+        if let Some(p) = path.as_deref_mut() {
+            p.push(real.y1);
+        }
+
+        let plane_theta = target
+            .filter(|t| t.signed_distance(real.y1.x) >= 0.0)
+            .map(|t| {
+                bracketed_root(0.0, 1.0, |th| {
+                    let (x, dx) = real.position_and_slope(th);
+                    (t.signed_distance(x), dx.dot(t.normal))
+                })
+            });
+        let ground_theta = if real.y0.x.y >= 0.0 {
+            first_ground_crossing(&real)
+        } else {
+            None
+        };
+
+        match (plane_theta, ground_theta) {
+            (Some(tp), tg) => {
+                if tg.is_some_and(|tg| tg < tp) {
+                    occluded = true;
+                    if options.ground == GroundMode::Stop {
+                        return stop_at_ground(
+                            &seg,
+                            &real,
+                            tg.unwrap_or(0.0),
+                            occluded,
+                            stats,
+                            &finish,
+                        );
+                    }
+                }
+                let t = target.expect("a plane crossing implies a target");
+                let (endpoint, st) = locate(&seg, &real, tp, t.normal, t.point);
+                return finish(endpoint, st.v, st.s, End::Plane, occluded, stats);
+            }
+            (None, Some(tg)) => {
+                occluded = true;
+                if options.ground == GroundMode::Stop {
+                    return stop_at_ground(&seg, &real, tg, occluded, stats, &finish);
+                }
+            }
+            (None, None) => {}
+        }
+
+        let d = plane_distance(y1.x).abs();
+        if d < nearest.0 {
+            nearest = (d, y1);
+        }
+        if real.y1.s >= max_length {
+            let best = if target.is_some() { nearest.1 } else { y1 };
+            return finish(
+                best.x,
+                best.v.val(),
+                best.s.val(),
+                End::MaxLength,
+                occluded,
+                stats,
+            );
+        }
+        y = y1;
+        f = f1;
+    }
+}
+
+fn real_state<T: Real>(y: &RayState<T>) -> RayState {
+    RayState {
+        x: y.x.val(),
+        v: y.v.val(),
+        s: y.s.val(),
+    }
+}
+
+/// The first θ ∈ [0, 1] where the step goes below y = 0, given y ≥ 0 at its start.
+fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
+    let height = |th: f64| {
+        let (x, dx) = seg.position_and_slope(th);
+        (x.y, dx.y)
+    };
+    if seg.y1.x.y < 0.0 {
+        return Some(bracketed_root(0.0, 1.0, height));
+    }
+    // Both ends above ground: the step can still dip below it if it turns from
+    // descending to rising inside (a mirage ray's lowest point).
+    if seg.f0.dx.y < 0.0 && seg.f1.dx.y > 0.0 {
+        let slope = |th: f64| {
+            let (_, dx) = seg.position_and_slope(th);
+            // d²x/dθ² by a central difference of the analytic slope: only the
+            // sign pattern matters for bracketing the minimum.
+            let e = 1e-6;
+            let (_, dxp) = seg.position_and_slope((th + e).min(1.0));
+            let (_, dxm) = seg.position_and_slope((th - e).max(0.0));
+            (
+                dx.y,
+                (dxp.y - dxm.y) / ((th + e).min(1.0) - (th - e).max(0.0)),
+            )
+        };
+        let lowest = bracketed_root(0.0, 1.0, slope);
+        if seg.position(lowest).y < 0.0 {
+            return Some(bracketed_root(0.0, lowest, height));
+        }
+    }
+    None
+}
+
+/// The point where the step meets the plane through `point` with `normal`,
+/// found at θ on the real trajectory and refined by one Newton step in `T`, so
+/// that dual parts carry the implicit derivative dθ = −∂g/∂p / ∂g/∂θ.
+fn locate<T: Real>(
+    seg: &Segment<T>,
+    real: &Segment<f64>,
+    theta: f64,
+    normal: V3,
+    point: V3,
+) -> (V3<T>, RayState) {
+    let (_, slope) = real.position_and_slope(theta);
+    let slope = slope.dot(normal);
+    let g = (seg.position(T::cst(theta)) - point.lift()).dot(normal.lift());
+    let theta_t = if slope != 0.0 && slope.is_finite() {
+        T::cst(theta) - g * (1.0 / slope)
+    } else {
+        T::cst(theta)
+    };
+    (seg.position(theta_t), real.state(theta))
+}
+
+fn stop_at_ground<T: Real>(
+    seg: &Segment<T>,
+    real: &Segment<f64>,
+    theta: f64,
+    occluded: bool,
+    stats: Stats,
+    finish: &impl Fn(V3<T>, V3, f64, End, bool, Stats) -> Trace<T>,
+) -> Trace<T> {
+    let (endpoint, st) = locate(seg, real, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
+    finish(endpoint, st.v, st.s, End::Ground, occluded, stats)
+}
