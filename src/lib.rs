@@ -8,8 +8,10 @@
 
 pub mod app;
 pub mod error;
+pub mod fit;
 pub mod io;
 pub mod math;
 pub mod medium;
 pub mod pair;
+pub mod scene;
 pub mod trace;

@@ -1,0 +1,1710 @@
+//! Box-constrained Levenberg–Marquardt least-squares solver for [`argmin`].
+//!
+//! Minimises `F(x) = ½‖r(x)‖²` for a residual vector `r: ℝⁿ → ℝᵐ` with
+//! Jacobian `J = ∂r/∂x`, optionally subject to box bounds `lower ≤ x ≤ upper`.
+//! [`LevenbergMarquardt`] implements [`Solver`] for [`LmState`], so it runs
+//! under [`argmin::core::Executor`] with observers, counters and
+//! `max_iters` like argmin's built-in solvers.
+//!
+//! # Algorithm
+//!
+//! One argmin iteration evaluates at most one trial point (none when the
+//! step is exactly zero):
+//!
+//! 1. **Scaling** (Moré 1978). `D = diag(d)` with `dⱼ` the running maximum of
+//!    the Euclidean norms of column `j` of `J` over all accepted points
+//!    (a column that has only ever been zero gets `dⱼ = 1`). All step-size
+//!    and damping decisions are made in the scaled variables `D x`, so the
+//!    iterates do not depend on the units of the parameters.
+//! 2. **Active set** (projected LM). A parameter sitting on a bound whose
+//!    gradient `g = Jᵀr` points out of the box (or whose bounds coincide) is
+//!    held fixed for the step; the remaining parameters are *free*.
+//! 3. **Damped step.** On the free parameters the step solves the linear
+//!    least-squares problem `[J; √μ·D] δ = [−r; 0]`. It is computed from an
+//!    SVD of the column-scaled free Jacobian `J D⁻¹` (after a thin QR when
+//!    `m > n`), never from `JᵀJ`, with singular values below
+//!    `ε·max(m, n)·σ_max` discarded. An exactly flat direction therefore gets
+//!    a zero step component instead of a NaN, and the decomposition is
+//!    reused for every `μ` tried at the same point.
+//! 4. **Projection.** The trial point is `P(x + δ)`, the clamp onto the box,
+//!    so no trial point ever leaves the box. If the clamp changed the step,
+//!    a projected scaled-gradient (Cauchy) step `P(x − t D⁻²g)` with the
+//!    exact minimising `t` of the damped model is also formed, and the one
+//!    with the smaller damped model value is used. The Cauchy candidate
+//!    guarantees sufficient model decrease, which the clamped LM step
+//!    alone does not, and keeps the method converging to a KKT point.
+//! 5. **Gain ratio** `ρ = (F(x) − F(x_trial)) / (L(0) − L(x_trial − x))`,
+//!    where `L(s) = ½‖r + J s‖²` is the Gauss–Newton model evaluated at the
+//!    *projected* step. The actual reduction is computed as
+//!    `½(r − r_trial)ᵀ(r + r_trial)`, which stays accurate when it is far
+//!    below `ε·F`; with `F − F_trial` the iterates would stall at about
+//!    `√ε` relative accuracy. The step is accepted iff `ρ > 0` and the trial
+//!    residual is finite; a non-finite residual counts as a rejection.
+//! 6. **Damping update** (Nielsen 1999). Accept:
+//!    `μ ← μ·max(⅓, 1 − (2ρ − 1)³)`, `ν ← 2`; reject: `μ ← μ·ν`, `ν ← 2ν`.
+//!    Initially `μ = τ·max diag(D⁻¹JᵀJD⁻¹)`. One deviation: on rejection a
+//!    `μ` below `σ²_min` (smallest resolved singular value of `J D⁻¹`, squared)
+//!    is first raised to `σ²_min`, because smaller values leave the step
+//!    unchanged and would only re-evaluate the same trial point. The
+//!    Jacobian is evaluated only at accepted points.
+//!
+//! # Termination
+//!
+//! Checked after every iteration (and once at the starting point); the
+//! reason is reported as
+//! `TerminationStatus::Terminated(TerminationReason::SolverExit(s))` with `s`
+//! one of the `REASON_*` constants on [`LevenbergMarquardt`]:
+//!
+//! | reason | test |
+//! |---|---|
+//! | [`REASON_ZERO_RESIDUAL`](LevenbergMarquardt::REASON_ZERO_RESIDUAL) | `F(x) == 0` exactly |
+//! | [`REASON_GTOL`](LevenbergMarquardt::REASON_GTOL) | `maxⱼ |pgⱼ| / (‖Jⱼ‖·‖r‖) ≤ gtol`, `pg` the projected gradient (MINPACK's cosine test) |
+//! | [`REASON_FTOL`](LevenbergMarquardt::REASON_FTOL) | actual and predicted relative reductions of `F` both `≤ ftol`, `ρ ≤ 2` (MINPACK) |
+//! | [`REASON_XTOL`](LevenbergMarquardt::REASON_XTOL) | `‖D δ‖ ≤ xtol·(‖D x‖ + xtol)`, `δ` the step just tried (accepted or not) |
+//! | [`REASON_STALL_DAMPING`](LevenbergMarquardt::REASON_STALL_DAMPING) | `μ > 1e20` |
+//! | [`REASON_STALL_REJECTIONS`](LevenbergMarquardt::REASON_STALL_REJECTIONS) | `max_rejections` consecutive rejected steps |
+//!
+//! The ftol and xtol tests also run after rejected steps, as in MINPACK:
+//! once no step can improve `F` at working precision, `μ` grows until the
+//! tried step passes one of them. They are skipped while the last evaluated
+//! trial residual was non-finite, so shrinking away from a non-finite region
+//! ends as a stall rather than as convergence. A tolerance of `0` disables
+//! the ftol/xtol test; `gtol = 0` still stops at an exactly stationary point.
+//!
+//! argmin itself adds `MaxItersReached` (`max_iters`, counting accepted *and*
+//! rejected iterations) and `TargetCostReached` (an absolute target on `F`,
+//! set with `state.target_cost(t)` in `Executor::configure`).
+//! [`LevenbergMarquardt::is_converged`] tells successful reasons from the rest.
+//!
+//! # Bookkeeping
+//!
+//! The state holds the current accepted parameter vector, its cost `F` and
+//! its Jacobian (`state.get_jacobian()`), so the final `J` is available to
+//! the caller, e.g. for a covariance estimate. Each iteration returns a
+//! [`KV`] with `mu`, `rho`, `step_norm` (`‖D δ‖`), `accepted`, `cost_trial`,
+//! `pred` (predicted reduction), `gnorm`, `n_fixed` and `rejections`
+//! (`rho` is `−∞` and `cost_trial` `+∞` for a non-finite trial residual).
+//! Every accepted point is also recorded as the state's best point, even
+//! when its rounded `F` ties the previous one (argmin's own bookkeeping
+//! records only strict decreases), so `get_param()` and `get_best_param()`
+//! agree at the end of a run.
+//!
+//! # References
+//!
+//! * J. J. Moré, *The Levenberg–Marquardt algorithm: implementation and
+//!   theory*, Numerical Analysis, LNM 630, Springer, 1978, pp. 105–116.
+//! * H. B. Nielsen, *Damping parameter in Marquardt's method*,
+//!   Tech. Rep. IMM-REP-1999-05, DTU, 1999.
+//! * C. Kanzow, N. Yamashita, M. Fukushima, *Levenberg–Marquardt methods
+//!   with strong local convergence properties for solving nonlinear
+//!   equations with convex constraints*, J. Comput. Appl. Math. 172 (2004)
+//!   375–397.
+//! * D. P. Bertsekas, *Projected Newton methods for optimization problems
+//!   with simple constraints*, SIAM J. Control Optim. 20 (1982) 221–246.
+//!
+//! # Example
+//!
+//! ```
+//! use argmin::core::{Error, Executor, Jacobian, Operator, State};
+//! use nalgebra::{DMatrix, DVector, dmatrix, dvector};
+//! use mirage::fit::lm::LevenbergMarquardt;
+//!
+//! /// Rosenbrock as least squares: r = [10(x₁ − x₀²), 1 − x₀].
+//! struct Rosenbrock;
+//!
+//! impl Operator for Rosenbrock {
+//!     type Param = DVector<f64>;
+//!     type Output = DVector<f64>;
+//!     fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, Error> {
+//!         Ok(dvector![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]])
+//!     }
+//! }
+//!
+//! impl Jacobian for Rosenbrock {
+//!     type Param = DVector<f64>;
+//!     type Jacobian = DMatrix<f64>;
+//!     fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, Error> {
+//!         Ok(dmatrix![-20.0 * x[0], 10.0; -1.0, 0.0])
+//!     }
+//! }
+//!
+//! let solver = LevenbergMarquardt::new()
+//!     .with_bounds(dvector![f64::NEG_INFINITY, -1.0], dvector![0.5, f64::INFINITY])?;
+//! let res = Executor::new(Rosenbrock, solver)
+//!     .configure(|s| s.param(dvector![-1.2, 1.0]).max_iters(200))
+//!     .run()?;
+//! let x = res.state().get_best_param().unwrap();
+//! // The unconstrained minimum (1, 1) is outside the box: KKT point on x₀ = 0.5.
+//! assert!((x[0] - 0.5).abs() < 1e-12 && (x[1] - 0.25).abs() < 1e-8);
+//! assert!(LevenbergMarquardt::is_converged(
+//!     res.state().get_termination_reason().unwrap()
+//! ));
+//! # Ok::<(), Error>(())
+//! ```
+
+use argmin::core::{
+    ArgminError, Error, IterState, Jacobian, KV, Operator, Problem, Solver, State,
+    TerminationReason, TerminationStatus,
+};
+use nalgebra::{DMatrix, DVector, SVD};
+
+/// The argmin state type [`LevenbergMarquardt`] works on: parameters and
+/// residuals are `DVector<f64>`, the Jacobian is an `m × n` `DMatrix<f64>`,
+/// the cost is `F = ½‖r‖²`. Gradient, Hessian and residual slots are unused.
+pub type LmState = IterState<DVector<f64>, (), DMatrix<f64>, (), (), f64>;
+
+/// Damping above which no acceptable step is considered findable. In the
+/// scaled variables the undamped curvature is at most of order one, so at
+/// `μ = 1e20` the step is ~20 orders of magnitude below a gradient step.
+const MU_MAX: f64 = 1e20;
+
+/// Keeps the damping strictly positive after many `×⅓` reductions. Small
+/// values are harmless because rounding-level singular values are cut off
+/// in the SVD solve; a floor any higher would throttle convergence on
+/// problems whose Jacobian becomes singular at the solution (Powell).
+const MU_MIN: f64 = 1e-300;
+
+/// Levenberg–Marquardt solver with Moré scaling, Nielsen damping, an
+/// SVD-based damped step and projected box constraints.
+///
+/// See the [module documentation](self) for the algorithm, the termination
+/// tests and references.
+///
+/// Defaults:
+///
+/// | setting | default | setter |
+/// |---|---|---|
+/// | `ftol` | `1e-10` | [`with_ftol`](Self::with_ftol) |
+/// | `xtol` | `1e-10` | [`with_xtol`](Self::with_xtol) |
+/// | `gtol` | `1e-12` | [`with_gtol`](Self::with_gtol) |
+/// | `τ` (initial damping factor) | `1e-3` | [`with_initial_damping`](Self::with_initial_damping) |
+/// | max consecutive rejections | `30` | [`with_max_rejections`](Self::with_max_rejections) |
+/// | bounds | none | [`with_bounds`](Self::with_bounds) |
+#[derive(Clone, Debug)]
+pub struct LevenbergMarquardt {
+    ftol: f64,
+    xtol: f64,
+    gtol: f64,
+    tau: f64,
+    max_rejections: u64,
+    bounds: Option<(DVector<f64>, DVector<f64>)>,
+    /// Per-run working data; rebuilt by `init`, so a solver value can be reused.
+    work: Option<Work>,
+    /// Set by `init`/`next_iter`, reported by `terminate`.
+    pending: Option<TerminationReason>,
+}
+
+/// Quantities tied to the current accepted point that the solver keeps
+/// between iterations (the state only carries `x`, `F` and `J`).
+#[derive(Clone, Debug)]
+struct Work {
+    r: DVector<f64>,
+    g: DVector<f64>,
+    d: DVector<f64>,
+    free: Vec<usize>,
+    decomp: Option<Decomp>,
+    gnorm: f64,
+    mu: f64,
+    nu: f64,
+    rejections: u64,
+    /// Whether the most recently evaluated trial residual was finite. The
+    /// ftol/xtol tests are skipped while it is not: a step that shrank to
+    /// nothing while fleeing non-finite residuals is a stall, not convergence.
+    last_trial_finite: bool,
+}
+
+/// SVD of the scaled free Jacobian `J_F D_F⁻¹ = U Σ Vᵀ`, with `c = Uᵀ r`
+/// precomputed so that a step for any `μ` costs only `O(n²)`.
+#[derive(Clone, Debug)]
+struct Decomp {
+    sigma: DVector<f64>,
+    v: DMatrix<f64>,
+    c: DVector<f64>,
+    cutoff: f64,
+}
+
+/// A candidate trial point together with its model quantities.
+struct Candidate {
+    x_trial: DVector<f64>,
+    step: DVector<f64>,
+    /// Predicted reduction of the undamped Gauss–Newton model.
+    pred: f64,
+    /// Predicted reduction of the damped model (used to compare candidates).
+    damped_red: f64,
+}
+
+fn invalid(text: impl Into<String>) -> Error {
+    ArgminError::InvalidParameter { text: text.into() }.into()
+}
+
+fn not_initialized(text: impl Into<String>) -> Error {
+    ArgminError::NotInitialized { text: text.into() }.into()
+}
+
+fn condition(text: impl Into<String>) -> Error {
+    ArgminError::ConditionViolated { text: text.into() }.into()
+}
+
+fn all_finite<'a>(it: impl IntoIterator<Item = &'a f64>) -> bool {
+    it.into_iter().all(|v| v.is_finite())
+}
+
+impl Default for LevenbergMarquardt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LevenbergMarquardt {
+    /// Reported when the residual vector is exactly zero.
+    pub const REASON_ZERO_RESIDUAL: &'static str = "LM converged: residual is exactly zero";
+    /// Reported when the projected gradient passes the `gtol` test.
+    pub const REASON_GTOL: &'static str =
+        "LM converged (gtol): projected gradient is orthogonal to the residual within gtol";
+    /// Reported when the relative cost reduction passes the `ftol` test.
+    pub const REASON_FTOL: &'static str =
+        "LM converged (ftol): actual and predicted relative cost reductions are below ftol";
+    /// Reported when the relative scaled step passes the `xtol` test.
+    pub const REASON_XTOL: &'static str =
+        "LM converged (xtol): relative scaled step length is below xtol";
+    /// Reported when the damping parameter grows past its maximum.
+    pub const REASON_STALL_DAMPING: &'static str =
+        "LM stalled: damping parameter exceeded its maximum without an acceptable step";
+    /// Reported after too many consecutive rejected steps.
+    pub const REASON_STALL_REJECTIONS: &'static str =
+        "LM stalled: too many consecutive rejected steps";
+
+    /// Creates a solver with the default settings listed on
+    /// [`LevenbergMarquardt`] and no bounds.
+    pub fn new() -> Self {
+        LevenbergMarquardt {
+            ftol: 1e-10,
+            xtol: 1e-10,
+            gtol: 1e-12,
+            tau: 1e-3,
+            max_rejections: 30,
+            bounds: None,
+            work: None,
+            pending: None,
+        }
+    }
+
+    fn check_tol(name: &str, tol: f64) -> Result<f64, Error> {
+        if !tol.is_finite() || tol < 0.0 {
+            return Err(invalid(format!(
+                "LevenbergMarquardt: {name} must be finite and non-negative, got {tol}"
+            )));
+        }
+        Ok(tol)
+    }
+
+    /// Sets the relative function tolerance: stop when both the actual and
+    /// the predicted relative reduction of `F` in a step are at most `ftol`.
+    /// `0` disables the test. Errors on negative or non-finite values.
+    pub fn with_ftol(mut self, ftol: f64) -> Result<Self, Error> {
+        self.ftol = Self::check_tol("ftol", ftol)?;
+        Ok(self)
+    }
+
+    /// Sets the relative step tolerance: stop when
+    /// `‖D δ‖ ≤ xtol·(‖D x‖ + xtol)`. `0` disables the test.
+    /// Errors on negative or non-finite values.
+    pub fn with_xtol(mut self, xtol: f64) -> Result<Self, Error> {
+        self.xtol = Self::check_tol("xtol", xtol)?;
+        Ok(self)
+    }
+
+    /// Sets the gradient tolerance: stop when the largest cosine between the
+    /// residual and a Jacobian column, over parameters not held at a bound,
+    /// is at most `gtol`. With `0` the test only fires at an exactly
+    /// stationary point. Errors on negative or non-finite values.
+    pub fn with_gtol(mut self, gtol: f64) -> Result<Self, Error> {
+        self.gtol = Self::check_tol("gtol", gtol)?;
+        Ok(self)
+    }
+
+    /// Sets `τ` in the initial damping `μ₀ = τ·max diag(D⁻¹JᵀJD⁻¹)`.
+    /// Small values (`1e-6`) trust the Gauss–Newton model from the start,
+    /// large ones (`1`) start closer to scaled gradient descent.
+    /// Errors unless `τ` is finite and positive.
+    pub fn with_initial_damping(mut self, tau: f64) -> Result<Self, Error> {
+        if !tau.is_finite() || tau <= 0.0 {
+            return Err(invalid(format!(
+                "LevenbergMarquardt: initial damping tau must be finite and positive, got {tau}"
+            )));
+        }
+        self.tau = tau;
+        Ok(self)
+    }
+
+    /// Sets how many consecutive rejected steps end the run with
+    /// [`REASON_STALL_REJECTIONS`](Self::REASON_STALL_REJECTIONS).
+    /// Errors on `0`.
+    pub fn with_max_rejections(mut self, max_rejections: u64) -> Result<Self, Error> {
+        if max_rejections == 0 {
+            return Err(invalid(
+                "LevenbergMarquardt: max_rejections must be at least 1",
+            ));
+        }
+        self.max_rejections = max_rejections;
+        Ok(self)
+    }
+
+    /// Sets per-parameter box bounds `lower ≤ x ≤ upper`; `±∞` entries leave
+    /// a side open and `lower[j] == upper[j]` fixes parameter `j`.
+    ///
+    /// Errors if the lengths differ, an entry is NaN, `lower[j] > upper[j]`,
+    /// a lower bound is `+∞` or an upper bound is `−∞`. The length is checked
+    /// against the parameter vector, and the starting point against the box,
+    /// when the run starts.
+    pub fn with_bounds(mut self, lower: DVector<f64>, upper: DVector<f64>) -> Result<Self, Error> {
+        if lower.len() != upper.len() {
+            return Err(invalid(format!(
+                "LevenbergMarquardt: lower bound has length {} but upper bound has length {}",
+                lower.len(),
+                upper.len()
+            )));
+        }
+        for (j, (&lo, &hi)) in lower.iter().zip(upper.iter()).enumerate() {
+            if lo.is_nan() || hi.is_nan() {
+                return Err(invalid(format!("LevenbergMarquardt: bound {j} is NaN")));
+            }
+            if lo > hi {
+                return Err(invalid(format!(
+                    "LevenbergMarquardt: lower bound {lo} exceeds upper bound {hi} for parameter {j}"
+                )));
+            }
+            if lo == f64::INFINITY || hi == f64::NEG_INFINITY {
+                return Err(invalid(format!(
+                    "LevenbergMarquardt: bounds [{lo}, {hi}] of parameter {j} admit no finite value"
+                )));
+            }
+        }
+        self.bounds = Some((lower, upper));
+        Ok(self)
+    }
+
+    /// Whether `reason` means the run ended at a solution: one of the
+    /// `ftol`/`xtol`/`gtol`/zero-residual reasons of this solver, argmin's
+    /// `SolverConverged` or `TargetCostReached`. Stalls, `MaxItersReached`,
+    /// timeouts and interrupts are not.
+    pub fn is_converged(reason: &TerminationReason) -> bool {
+        match reason {
+            TerminationReason::SolverConverged | TerminationReason::TargetCostReached => true,
+            TerminationReason::SolverExit(s) => [
+                Self::REASON_ZERO_RESIDUAL,
+                Self::REASON_GTOL,
+                Self::REASON_FTOL,
+                Self::REASON_XTOL,
+            ]
+            .contains(&s.as_str()),
+            _ => false,
+        }
+    }
+
+    fn bound(&self, j: usize) -> (f64, f64) {
+        match &self.bounds {
+            Some((lo, hi)) => (lo[j], hi[j]),
+            None => (f64::NEG_INFINITY, f64::INFINITY),
+        }
+    }
+
+    /// Parameters that may move this step. A parameter is held when its
+    /// bounds coincide or when it sits on a bound and descent (`−g`) would
+    /// push it out of the box; moving it would only be undone by the
+    /// projection and would spoil the step for the others.
+    fn free_set(&self, x: &DVector<f64>, g: &DVector<f64>) -> Vec<usize> {
+        (0..x.len())
+            .filter(|&j| {
+                let (lo, hi) = self.bound(j);
+                let held = lo == hi || (x[j] <= lo && g[j] > 0.0) || (x[j] >= hi && g[j] < 0.0);
+                !held
+            })
+            .collect()
+    }
+
+    /// MINPACK's scale-invariant gradient measure restricted to the free
+    /// parameters: the largest cosine between `r` and a Jacobian column.
+    fn gradient_measure(
+        jac: &DMatrix<f64>,
+        r: &DVector<f64>,
+        g: &DVector<f64>,
+        free: &[usize],
+    ) -> f64 {
+        let rnorm = r.norm();
+        if rnorm == 0.0 {
+            return 0.0;
+        }
+        free.iter()
+            .filter_map(|&j| {
+                let cn = jac.column(j).norm();
+                (cn > 0.0).then(|| g[j].abs() / (cn * rnorm))
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Moves `w` to a newly accepted point `(x, r, J)`: widens the running
+    /// column-norm scaling and rebuilds the gradient, the active set, the
+    /// factorisation and the gradient measure. Damping is left alone.
+    fn refresh(
+        &self,
+        w: &mut Work,
+        x: &DVector<f64>,
+        r: DVector<f64>,
+        jac: &DMatrix<f64>,
+    ) -> Result<(), Error> {
+        for (j, dj) in w.d.iter_mut().enumerate() {
+            *dj = dj.max(jac.column(j).norm());
+        }
+        w.g = jac.tr_mul(&r);
+        w.free = self.free_set(x, &w.g);
+        w.decomp = Decomp::new(jac, &r, &w.d, &w.free)?;
+        w.gnorm = Self::gradient_measure(jac, &r, &w.g, &w.free);
+        w.r = r;
+        Ok(())
+    }
+
+    /// Clamps `x + step` onto the box. The trial point is built directly
+    /// from the clamped coordinates (not as `x + (clamped − x)`) so rounding
+    /// can never put it outside; the returned step is what was actually taken.
+    fn project(&self, x: &DVector<f64>, step: &DVector<f64>) -> (DVector<f64>, DVector<f64>, bool) {
+        let mut clipped = false;
+        let x_trial = DVector::from_fn(x.len(), |j, _| {
+            let (lo, hi) = self.bound(j);
+            let t = x[j] + step[j];
+            let c = t.max(lo).min(hi);
+            clipped |= c != t;
+            c
+        });
+        let taken = &x_trial - x;
+        (x_trial, taken, clipped)
+    }
+
+    fn candidate(
+        &self,
+        x: &DVector<f64>,
+        step: &DVector<f64>,
+        w: &Work,
+        jac: &DMatrix<f64>,
+    ) -> (Candidate, bool) {
+        // An overflowing step must never reach `apply`; a zero step is
+        // rejected without an evaluation and raises the damping instead.
+        let (x_trial, taken, clipped) = if all_finite(step.iter()) {
+            self.project(x, step)
+        } else {
+            (x.clone(), DVector::zeros(x.len()), false)
+        };
+        let js = jac * &taken;
+        // L(0) − L(s) = −(Js)ᵀ(r + ½Js): avoids cancellation in ‖r‖² − ‖r + Js‖².
+        let pred = -js.dot(&(&w.r + 0.5 * &js));
+        let dstep = taken.component_mul(&w.d).norm_squared();
+        let damped_red = pred - 0.5 * w.mu * dstep;
+        (
+            Candidate {
+                x_trial,
+                step: taken,
+                pred,
+                damped_red,
+            },
+            clipped,
+        )
+    }
+
+    /// Chooses the trial point for the current `μ`: the projected LM step,
+    /// or the projected scaled-gradient step when clipping made the LM step
+    /// worse on the damped model.
+    fn trial(&self, x: &DVector<f64>, w: &Work, jac: &DMatrix<f64>) -> Candidate {
+        let n = x.len();
+        let mut lm_step = DVector::zeros(n);
+        if let Some(dec) = &w.decomp {
+            let y = dec.solve(w.mu);
+            for (c, &j) in w.free.iter().enumerate() {
+                lm_step[j] = y[c] / w.d[j];
+            }
+        }
+        let (lm, clipped) = self.candidate(x, &lm_step, w, jac);
+        if !clipped && lm.damped_red > 0.0 {
+            return lm;
+        }
+
+        let mut s = DVector::zeros(n);
+        for &j in &w.free {
+            s[j] = -w.g[j] / (w.d[j] * w.d[j]);
+        }
+        let num = -w.g.dot(&s);
+        let denom = (jac * &s).norm_squared() + w.mu * s.component_mul(&w.d).norm_squared();
+        if num > 0.0 && denom > 0.0 && num.is_finite() && denom.is_finite() {
+            let (cauchy, _) = self.candidate(x, &(s * (num / denom)), w, jac);
+            if cauchy.damped_red > lm.damped_red {
+                return cauchy;
+            }
+        }
+        lm
+    }
+}
+
+impl Decomp {
+    /// Factorises the scaled free Jacobian. Returns `None` when there is
+    /// nothing to solve for (no residuals or no free parameters).
+    fn new(
+        jac: &DMatrix<f64>,
+        r: &DVector<f64>,
+        d: &DVector<f64>,
+        free: &[usize],
+    ) -> Result<Option<Decomp>, Error> {
+        let m = jac.nrows();
+        let k = free.len();
+        if m == 0 || k == 0 {
+            return Ok(None);
+        }
+        let scaled = DMatrix::from_fn(m, k, |i, c| jac[(i, free[c])] / d[free[c]]);
+        // With m > k a thin QR first shrinks the SVD to k × k and avoids
+        // forming the m × k left singular vectors.
+        let (core, rhs) = if m > k {
+            let qr = scaled.qr();
+            let mut qtr = r.clone();
+            qr.q_tr_mul(&mut qtr);
+            (qr.r(), qtr.rows(0, k).into_owned())
+        } else {
+            (scaled, r.clone())
+        };
+        let max_niter = 1000 + 100 * k;
+        let svd = SVD::try_new(core, true, true, 5.0 * f64::EPSILON, max_niter)
+            .ok_or_else(|| condition("LevenbergMarquardt: SVD did not converge"))?;
+        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+            return Err(condition(
+                "LevenbergMarquardt: SVD did not return singular vectors",
+            ));
+        };
+        let sigma = svd.singular_values;
+        let sigma_max = sigma.iter().copied().fold(0.0, f64::max);
+        Ok(Some(Decomp {
+            c: u.tr_mul(&rhs),
+            v: v_t.transpose(),
+            cutoff: sigma_max * f64::EPSILON * (m.max(k) as f64),
+            sigma,
+        }))
+    }
+
+    /// Square of the smallest singular value the solve uses (0 if none).
+    fn smallest_resolved_sq(&self) -> f64 {
+        self.sigma
+            .iter()
+            .copied()
+            .filter(|&s| s > self.cutoff && s > 0.0)
+            .reduce(f64::min)
+            .map_or(0.0, |s| s * s)
+    }
+
+    /// Scaled step `ŷ = −V diag(σ/(σ² + μ)) Uᵀr`, the minimiser of
+    /// `‖r + Ĵŷ‖² + μ‖ŷ‖²`. Singular values at rounding level are dropped
+    /// so flat directions get no step rather than an amplified error.
+    fn solve(&self, mu: f64) -> DVector<f64> {
+        let mut y = DVector::zeros(self.v.nrows());
+        for (i, &s) in self.sigma.iter().enumerate() {
+            if s > self.cutoff && s > 0.0 {
+                let f = -s * self.c[i] / (s * s + mu);
+                y.axpy(f, &self.v.column(i), 1.0);
+            }
+        }
+        y
+    }
+}
+
+impl<O> Solver<O, LmState> for LevenbergMarquardt
+where
+    O: Operator<Param = DVector<f64>, Output = DVector<f64>>
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+{
+    fn name(&self) -> &str {
+        "Levenberg-Marquardt"
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> Result<(LmState, Option<KV>), Error> {
+        self.work = None;
+        self.pending = None;
+        let x = state.take_param().ok_or_else(|| {
+            not_initialized(
+                "LevenbergMarquardt requires an initial parameter vector; \
+                 set it with `Executor::configure(|s| s.param(x0))`",
+            )
+        })?;
+        let n = x.len();
+        if !all_finite(x.iter()) {
+            return Err(invalid(
+                "LevenbergMarquardt: initial parameters are not finite",
+            ));
+        }
+        if let Some((lo, hi)) = &self.bounds {
+            if lo.len() != n {
+                return Err(invalid(format!(
+                    "LevenbergMarquardt: bounds have length {} but the parameter vector has length {n}",
+                    lo.len()
+                )));
+            }
+            if let Some(j) = (0..n).find(|&j| x[j] < lo[j] || x[j] > hi[j]) {
+                return Err(invalid(format!(
+                    "LevenbergMarquardt: initial parameter {j} = {} is outside its bounds [{}, {}]",
+                    x[j], lo[j], hi[j]
+                )));
+            }
+        }
+
+        let r = problem.apply(&x)?;
+        if !all_finite(r.iter()) {
+            return Err(invalid(
+                "LevenbergMarquardt: residual at the initial parameters is not finite",
+            ));
+        }
+        let jac = problem.jacobian(&x)?;
+        if jac.nrows() != r.len() || jac.ncols() != n {
+            return Err(invalid(format!(
+                "LevenbergMarquardt: Jacobian is {}x{} but residual has length {} and parameters length {n}",
+                jac.nrows(),
+                jac.ncols(),
+                r.len()
+            )));
+        }
+        if !all_finite(jac.iter()) {
+            return Err(invalid(
+                "LevenbergMarquardt: Jacobian at the initial parameters is not finite",
+            ));
+        }
+
+        // Columns that are zero at the start get unit scale; the running max
+        // below replaces it once the column becomes informative.
+        let d = DVector::from_fn(n, |j, _| {
+            let cn = jac.column(j).norm();
+            if cn > 0.0 { cn } else { 1.0 }
+        });
+        let cost = 0.5 * r.norm_squared();
+        let mut w = Work {
+            r: DVector::zeros(0),
+            g: DVector::zeros(n),
+            d,
+            free: Vec::new(),
+            decomp: None,
+            gnorm: 0.0,
+            mu: 0.0,
+            nu: 2.0,
+            rejections: 0,
+            last_trial_finite: true,
+        };
+        self.refresh(&mut w, &x, r, &jac)?;
+        let max_diag = (0..n)
+            .map(|j| (jac.column(j).norm() / w.d[j]).powi(2))
+            .fold(0.0, f64::max);
+        let mu = (self.tau * if max_diag > 0.0 { max_diag } else { 1.0 }).max(MU_MIN);
+        w.mu = mu;
+        let n_fixed = (n - w.free.len()) as u64;
+        let gnorm = w.gnorm;
+
+        if cost == 0.0 {
+            self.pending = Some(TerminationReason::SolverExit(
+                Self::REASON_ZERO_RESIDUAL.into(),
+            ));
+        } else if gnorm <= self.gtol {
+            self.pending = Some(TerminationReason::SolverExit(Self::REASON_GTOL.into()));
+        }
+        self.work = Some(w);
+        let kv = argmin::kv!(
+            "mu" => mu;
+            "gnorm" => gnorm;
+            "n_fixed" => n_fixed;
+        );
+        Ok((state.param(x).cost(cost).jacobian(jac), Some(kv)))
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> Result<(LmState, Option<KV>), Error> {
+        let mut w = self
+            .work
+            .take()
+            .ok_or_else(|| not_initialized("LevenbergMarquardt: next_iter called before init"))?;
+        let x = state
+            .get_param()
+            .cloned()
+            .ok_or_else(|| not_initialized("LevenbergMarquardt: state has no parameter vector"))?;
+        let cost = state.get_cost();
+        let mu_used = w.mu;
+
+        let cand = {
+            let jac = state
+                .get_jacobian()
+                .ok_or_else(|| not_initialized("LevenbergMarquardt: state has no Jacobian"))?;
+            self.trial(&x, &w, jac)
+        };
+        let step_norm = cand.step.component_mul(&w.d).norm();
+        let pred = cand.pred;
+
+        // A zero step (everything held or resolved below rounding) would only
+        // re-evaluate r(x); skip the call and let the tests below end the run.
+        let mut r_trial_ok: Option<DVector<f64>> = None;
+        let (cost_trial, actred) = if cand.step.iter().all(|&s| s == 0.0) {
+            (cost, 0.0)
+        } else {
+            let r_trial = problem.apply(&cand.x_trial)?;
+            if r_trial.len() != w.r.len() {
+                return Err(invalid(format!(
+                    "LevenbergMarquardt: residual length changed from {} to {}",
+                    w.r.len(),
+                    r_trial.len()
+                )));
+            }
+            // NaN/inf entries, or finite entries whose squares overflow, all
+            // make this non-finite; such a trial point is simply rejected.
+            let c = 0.5 * r_trial.norm_squared();
+            w.last_trial_finite = c.is_finite();
+            if c.is_finite() {
+                // ½(r − r_t)ᵀ(r + r_t) resolves reductions far below eps·F,
+                // where F − F_t would be pure rounding; without it the
+                // iterates stall at ~√eps relative accuracy.
+                let red = 0.5 * (&w.r - &r_trial).dot(&(&w.r + &r_trial));
+                r_trial_ok = Some(r_trial);
+                (c, red)
+            } else {
+                (f64::INFINITY, f64::NEG_INFINITY)
+            }
+        };
+        let rho = if !cost_trial.is_finite() {
+            f64::NEG_INFINITY
+        } else if pred > 0.0 {
+            actred / pred
+        } else {
+            0.0
+        };
+
+        let mut accepted = false;
+        if rho > 0.0 && pred > 0.0 {
+            if let Some(r_trial) = r_trial_ok.take() {
+                let jac = problem.jacobian(&cand.x_trial)?;
+                if jac.nrows() != r_trial.len() || jac.ncols() != x.len() {
+                    return Err(invalid(format!(
+                        "LevenbergMarquardt: Jacobian is {}x{}, expected {}x{}",
+                        jac.nrows(),
+                        jac.ncols(),
+                        r_trial.len(),
+                        x.len()
+                    )));
+                }
+                // A point whose Jacobian is unusable cannot be stepped from;
+                // treat it like a non-finite residual.
+                if all_finite(jac.iter()) {
+                    self.refresh(&mut w, &cand.x_trial, r_trial, &jac)?;
+                    let t = 2.0 * rho - 1.0;
+                    w.mu = (w.mu * (1.0 / 3.0f64).max(1.0 - t * t * t)).max(MU_MIN);
+                    w.nu = 2.0;
+                    w.rejections = 0;
+                    accepted = true;
+                    state = state
+                        .param(cand.x_trial.clone())
+                        .cost(cost_trial)
+                        .jacobian(jac);
+                    // The accurate `actred > 0` proves this point is better,
+                    // but its rounded F may tie (or exceed by an ulp) the
+                    // previous one, and the Executor's `update()` only records
+                    // strict decreases. LM is monotone, so record it here.
+                    if cost_trial >= state.best_cost {
+                        state.prev_best_param = state.best_param.replace(cand.x_trial.clone());
+                        state.prev_best_cost = state.best_cost;
+                        state.best_cost = cost_trial;
+                        state.last_best_iter = state.iter;
+                    }
+                }
+            }
+        }
+        if !accepted {
+            // Below the smallest resolved σ² the damping does not change the
+            // step, so doubling from there would only re-evaluate the same
+            // trial point; start the increase where it has an effect.
+            let effective = w.decomp.as_ref().map_or(0.0, Decomp::smallest_resolved_sq);
+            w.mu = w.mu.max(effective) * w.nu;
+            w.nu = (2.0 * w.nu).min(1e100);
+            w.rejections += 1;
+        }
+
+        let x_now = state.get_param().unwrap_or(&x);
+        let xnorm = x_now.component_mul(&w.d).norm();
+        let rho_ftol = if pred > 0.0 && rho.is_finite() {
+            rho
+        } else {
+            0.0
+        };
+        let reason = if accepted && cost_trial == 0.0 {
+            Some(Self::REASON_ZERO_RESIDUAL)
+        } else if accepted && w.gnorm <= self.gtol {
+            Some(Self::REASON_GTOL)
+        } else if self.ftol > 0.0
+            && w.last_trial_finite
+            && actred.abs() <= self.ftol * cost
+            && pred <= self.ftol * cost
+            && rho_ftol <= 2.0
+        {
+            Some(Self::REASON_FTOL)
+        } else if self.xtol > 0.0
+            && w.last_trial_finite
+            && step_norm <= self.xtol * (xnorm + self.xtol)
+        {
+            Some(Self::REASON_XTOL)
+        } else if w.mu > MU_MAX {
+            Some(Self::REASON_STALL_DAMPING)
+        } else if w.rejections >= self.max_rejections {
+            Some(Self::REASON_STALL_REJECTIONS)
+        } else {
+            None
+        };
+        self.pending = reason.map(|s| TerminationReason::SolverExit(s.into()));
+
+        let kv = argmin::kv!(
+            "mu" => mu_used;
+            "rho" => rho;
+            "step_norm" => step_norm;
+            "accepted" => accepted;
+            "cost_trial" => cost_trial;
+            "pred" => pred;
+            "gnorm" => w.gnorm;
+            "n_fixed" => (x.len() - w.free.len()) as u64;
+            "rejections" => w.rejections;
+        );
+        self.work = Some(w);
+        Ok((state, Some(kv)))
+    }
+
+    fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
+        match &self.pending {
+            Some(reason) => TerminationStatus::Terminated(reason.clone()),
+            None => TerminationStatus::NotTerminated,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use argmin::core::observers::{Observe, ObserverMode};
+    use argmin::core::{Executor, KvValue, OptimizationResult, State};
+    use nalgebra::{dmatrix, dvector};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::{Arc, Mutex};
+
+    type Vector = DVector<f64>;
+    type Matrix = DMatrix<f64>;
+
+    /// Residual/Jacobian pair from two closures.
+    struct Fun<R, Jf> {
+        r: R,
+        j: Jf,
+    }
+
+    impl<R, Jf> Operator for Fun<R, Jf>
+    where
+        R: Fn(&Vector) -> Vector,
+    {
+        type Param = Vector;
+        type Output = Vector;
+        fn apply(&self, x: &Vector) -> Result<Vector, Error> {
+            Ok((self.r)(x))
+        }
+    }
+
+    impl<R, Jf> Jacobian for Fun<R, Jf>
+    where
+        Jf: Fn(&Vector) -> Matrix,
+    {
+        type Param = Vector;
+        type Jacobian = Matrix;
+        fn jacobian(&self, x: &Vector) -> Result<Matrix, Error> {
+            Ok((self.j)(x))
+        }
+    }
+
+    fn rosenbrock() -> Fun<impl Fn(&Vector) -> Vector, impl Fn(&Vector) -> Matrix> {
+        Fun {
+            r: |x: &Vector| dvector![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]],
+            j: |x: &Vector| dmatrix![-20.0 * x[0], 10.0; -1.0, 0.0],
+        }
+    }
+
+    /// Panics if the wrapped problem is ever evaluated outside the box.
+    struct BoxChecked<P> {
+        inner: P,
+        lo: Vector,
+        hi: Vector,
+        evals: AtomicUsize,
+    }
+
+    impl<P> BoxChecked<P> {
+        fn check(&self, x: &Vector) {
+            for j in 0..x.len() {
+                assert!(
+                    x[j] >= self.lo[j] && x[j] <= self.hi[j],
+                    "evaluated outside the box: x[{j}] = {} not in [{}, {}]",
+                    x[j],
+                    self.lo[j],
+                    self.hi[j]
+                );
+            }
+            self.evals.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    impl<P: Operator<Param = Vector, Output = Vector>> Operator for BoxChecked<P> {
+        type Param = Vector;
+        type Output = Vector;
+        fn apply(&self, x: &Vector) -> Result<Vector, Error> {
+            self.check(x);
+            self.inner.apply(x)
+        }
+    }
+
+    impl<P: Jacobian<Param = Vector, Jacobian = Matrix>> Jacobian for BoxChecked<P> {
+        type Param = Vector;
+        type Jacobian = Matrix;
+        fn jacobian(&self, x: &Vector) -> Result<Matrix, Error> {
+            self.check(x);
+            self.inner.jacobian(x)
+        }
+    }
+
+    /// Records every parameter vector and KV the executor reports.
+    #[derive(Clone, Default)]
+    struct Recorder {
+        params: Arc<Mutex<Vec<Vector>>>,
+        kvs: Arc<Mutex<Vec<KV>>>,
+    }
+
+    impl Observe<LmState> for Recorder {
+        fn observe_init(&mut self, _name: &str, state: &LmState, kv: &KV) -> Result<(), Error> {
+            self.params
+                .lock()
+                .unwrap()
+                .push(state.get_param().unwrap().clone());
+            self.kvs.lock().unwrap().push(kv.clone());
+            Ok(())
+        }
+        fn observe_iter(&mut self, state: &LmState, kv: &KV) -> Result<(), Error> {
+            self.params
+                .lock()
+                .unwrap()
+                .push(state.get_param().unwrap().clone());
+            self.kvs.lock().unwrap().push(kv.clone());
+            Ok(())
+        }
+    }
+
+    impl Recorder {
+        /// Number of iterations whose step was accepted.
+        fn accepted(&self) -> u64 {
+            self.kvs
+                .lock()
+                .unwrap()
+                .iter()
+                .filter(|kv| kv.get("accepted") == Some(&KvValue::Bool(true)))
+                .count() as u64
+        }
+    }
+
+    type Res<P> = OptimizationResult<P, LevenbergMarquardt, LmState>;
+
+    fn solve<P>(p: P, solver: LevenbergMarquardt, x0: Vector, max_iters: u64) -> (Res<P>, Recorder)
+    where
+        P: Operator<Param = Vector, Output = Vector> + Jacobian<Param = Vector, Jacobian = Matrix>,
+    {
+        let rec = Recorder::default();
+        let res = Executor::new(p, solver)
+            .configure(|s| s.param(x0).max_iters(max_iters).counting(true))
+            .add_observer(rec.clone(), ObserverMode::Always)
+            .run()
+            .unwrap();
+        // LM is monotone: the current point must always be the best one.
+        assert_eq!(res.state().get_param(), res.state().get_best_param());
+        (res, rec)
+    }
+
+    fn reason<P>(res: &Res<P>) -> TerminationReason {
+        res.state().get_termination_reason().unwrap().clone()
+    }
+
+    fn exit(s: &str) -> TerminationReason {
+        TerminationReason::SolverExit(s.to_string())
+    }
+
+    fn best<P>(res: &Res<P>) -> Vector {
+        res.state().get_best_param().unwrap().clone()
+    }
+
+    fn assert_no_nan(rec: &Recorder) {
+        for p in rec.params.lock().unwrap().iter() {
+            assert!(all_finite(p.iter()), "non-finite iterate {p}");
+        }
+        for kv in rec.kvs.lock().unwrap().iter() {
+            for (k, v) in kv.kv.iter() {
+                if let KvValue::Float(f) = v {
+                    assert!(!f.is_nan(), "KV {k} is NaN");
+                }
+            }
+        }
+    }
+
+    /// Largest cosine between r and a Jacobian column (MINPACK's gtol measure).
+    fn gradient_cosine(j: &Matrix, r: &Vector) -> f64 {
+        let g = j.tr_mul(r);
+        (0..j.ncols())
+            .map(|c| g[c].abs() / (j.column(c).norm() * r.norm()))
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn rosenbrock_converges() {
+        let (res, rec) = solve(
+            rosenbrock(),
+            LevenbergMarquardt::new(),
+            dvector![-1.2, 1.0],
+            200,
+        );
+        let x = best(&res);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-10 && (x[1] - 1.0).abs() < 1e-10,
+            "x = {x}"
+        );
+        assert!(res.state().get_best_cost() < 1e-20);
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        assert_no_nan(&rec);
+        // Jacobian in the state belongs to the final accepted point.
+        let j = res.state().get_jacobian().unwrap();
+        assert_eq!(j, &dmatrix![-20.0 * x[0], 10.0; -1.0, 0.0]);
+    }
+
+    fn exp_model(
+        t: Vector,
+        y: Vector,
+    ) -> Fun<impl Fn(&Vector) -> Vector, impl Fn(&Vector) -> Matrix> {
+        let t2 = t.clone();
+        Fun {
+            r: move |p: &Vector| t.map(|ti| p[0] * (-p[1] * ti).exp() + p[2]) - &y,
+            j: move |p: &Vector| {
+                Matrix::from_fn(t2.len(), 3, |i, c| {
+                    let e = (-p[1] * t2[i]).exp();
+                    match c {
+                        0 => e,
+                        1 => -p[0] * t2[i] * e,
+                        _ => 1.0,
+                    }
+                })
+            },
+        }
+    }
+
+    fn exp_data(noise: f64) -> (Vector, Vector) {
+        let t = Vector::from_fn(40, |i, _| 0.125 * i as f64);
+        // Deterministic zero-mean-ish perturbation.
+        let y = t.map(|ti| 2.5 * (-1.3 * ti).exp() + 0.5 + noise * (7.3 * ti + 0.4).sin());
+        (t, y)
+    }
+
+    #[test]
+    fn exp_decay_noise_free_recovers_parameters() {
+        let (t, y) = exp_data(0.0);
+        let (res, rec) = solve(
+            exp_model(t, y),
+            LevenbergMarquardt::new(),
+            dvector![1.0, 0.5, 0.0],
+            200,
+        );
+        let p = best(&res);
+        let truth = dvector![2.5, 1.3, 0.5];
+        for k in 0..3 {
+            assert!(((p[k] - truth[k]) / truth[k]).abs() < 1e-9, "p = {p}");
+        }
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn exp_decay_noisy_satisfies_normal_equations() {
+        let (t, y) = exp_data(0.05);
+        let (res, _) = solve(
+            exp_model(t.clone(), y.clone()),
+            LevenbergMarquardt::new(),
+            dvector![1.0, 0.5, 0.0],
+            200,
+        );
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        let p = best(&res);
+        let model = exp_model(t.clone(), y.clone());
+        let r = model.apply(&p).unwrap();
+        let j = model.jacobian(&p).unwrap();
+        assert!(r.norm() > 0.1, "noisy data must leave a residual");
+        let cos = gradient_cosine(&j, &r);
+        assert!(cos < 1e-7, "gradient cosine {cos}");
+        // A different start lands on the same least-squares solution.
+        let (res2, _) = solve(
+            exp_model(t, y),
+            LevenbergMarquardt::new(),
+            dvector![5.0, 3.0, -1.0],
+            200,
+        );
+        let p2 = best(&res2);
+        assert!((&p - &p2).norm() < 1e-7 * p.norm(), "{p} vs {p2}");
+    }
+
+    /// y = A·exp(−k·t) with k ~ 1e-4 /s and A ~ 1e3 m, t up to 4e4 s.
+    fn badly_scaled(k_unit: f64) -> Fun<impl Fn(&Vector) -> Vector, impl Fn(&Vector) -> Matrix> {
+        let t = Vector::from_fn(30, |i, _| 1500.0 * i as f64);
+        let y = t.map(|ti| 1234.5 * (-1.7e-4 * ti).exp() + 3.0 * (0.001 * ti).cos());
+        let t2 = t.clone();
+        Fun {
+            r: move |p: &Vector| t.map(|ti| p[1] * (-p[0] * k_unit * ti).exp()) - &y,
+            j: move |p: &Vector| {
+                Matrix::from_fn(t2.len(), 2, |i, c| {
+                    let e = (-p[0] * k_unit * t2[i]).exp();
+                    if c == 0 {
+                        -p[1] * k_unit * t2[i] * e
+                    } else {
+                        e
+                    }
+                })
+            },
+        }
+    }
+
+    #[test]
+    fn badly_scaled_converges_and_is_unit_invariant() {
+        let (res, rec) = solve(
+            badly_scaled(1.0),
+            LevenbergMarquardt::new(),
+            dvector![3e-4, 500.0],
+            100,
+        );
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        let p = best(&res);
+        let model = badly_scaled(1.0);
+        let cos = gradient_cosine(&model.jacobian(&p).unwrap(), &model.apply(&p).unwrap());
+        assert!(cos < 1e-7, "gradient cosine {cos}, p = {p}");
+        assert!(
+            (p[0] - 1.7e-4).abs() < 1e-5 && (p[1] - 1234.5).abs() < 10.0,
+            "p = {p}"
+        );
+
+        // Same problem with k expressed in units of 1e-4: identical path.
+        let (res2, rec2) = solve(
+            badly_scaled(1e-4),
+            LevenbergMarquardt::new(),
+            dvector![3.0, 500.0],
+            100,
+        );
+        assert_eq!(reason(&res), reason(&res2));
+        assert_eq!(res.state().get_iter(), res2.state().get_iter());
+        let p2 = best(&res2);
+        assert!((p2[0] * 1e-4 - p[0]).abs() < 1e-10 * p[0] && (p2[1] - p[1]).abs() < 1e-10 * p[1]);
+        let (a, b) = (rec.params.lock().unwrap(), rec2.params.lock().unwrap());
+        assert_eq!(a.len(), b.len());
+        for (u, v) in a.iter().zip(b.iter()) {
+            assert!((v[0] * 1e-4 - u[0]).abs() <= 1e-9 * u[0].abs());
+            assert!((v[1] - u[1]).abs() <= 1e-9 * u[1].abs());
+        }
+    }
+
+    #[test]
+    fn powell_singular_converges_without_nan() {
+        let s5 = 5f64.sqrt();
+        let s10 = 10f64.sqrt();
+        let p = Fun {
+            r: move |x: &Vector| {
+                dvector![
+                    x[0] + 10.0 * x[1],
+                    s5 * (x[2] - x[3]),
+                    (x[1] - 2.0 * x[2]).powi(2),
+                    s10 * (x[0] - x[3]).powi(2)
+                ]
+            },
+            j: move |x: &Vector| {
+                let a = 2.0 * (x[1] - 2.0 * x[2]);
+                let b = 2.0 * s10 * (x[0] - x[3]);
+                dmatrix![
+                    1.0, 10.0, 0.0, 0.0;
+                    0.0, 0.0, s5, -s5;
+                    0.0, a, -2.0 * a, 0.0;
+                    b, 0.0, 0.0, -b
+                ]
+            },
+        };
+        let (res, rec) = solve(
+            p,
+            LevenbergMarquardt::new(),
+            dvector![3.0, -1.0, 0.0, 1.0],
+            500,
+        );
+        let x = best(&res);
+        assert!(x.norm() < 1e-6, "x = {x}, reason {:?}", reason(&res));
+        assert!(res.state().get_best_cost() < 1e-20);
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn rank_deficient_converges_on_determined_part() {
+        let p = Fun {
+            r: |x: &Vector| dvector![x[0] + x[1] - 3.0, 2.0 * (x[0] + x[1]) - 6.0, x[2] - 1.0],
+            j: |_: &Vector| dmatrix![1.0, 1.0, 0.0; 2.0, 2.0, 0.0; 0.0, 0.0, 1.0],
+        };
+        let x0 = dvector![0.5, -2.0, 7.0];
+        let (res, rec) = solve(p, LevenbergMarquardt::new(), x0.clone(), 200);
+        let x = best(&res);
+        assert!((x[0] + x[1] - 3.0).abs() < 1e-10, "x = {x}");
+        assert!((x[2] - 1.0).abs() < 1e-10, "x = {x}");
+        // The flat direction x0 − x1 gets no step component at all.
+        assert!(((x[0] - x[1]) - (x0[0] - x0[1])).abs() < 1e-12, "x = {x}");
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn underdetermined_problem_uses_direct_svd_path() {
+        // m = 1 < n = 3: no QR pre-step; the step stays in the row space.
+        let p = Fun {
+            r: |x: &Vector| dvector![x[0] + 2.0 * x[1] - x[2] - 3.0],
+            j: |_: &Vector| dmatrix![1.0, 2.0, -1.0],
+        };
+        let (res, rec) = solve(p, LevenbergMarquardt::new(), dvector![0.0, 0.0, 0.0], 100);
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        let x = best(&res);
+        assert!((x[0] + 2.0 * x[1] - x[2] - 3.0).abs() < 1e-12, "x = {x}");
+        // In the scaled variables y = D x (D = column norms 1, 2, 1) every
+        // step lies in the row space of J D⁻¹ = (1, 1, −1).
+        let d = dvector![1.0, 2.0, 1.0];
+        let y = x.component_mul(&d);
+        assert!(
+            (y[0] - y[1]).abs() < 1e-12 && (y[0] + y[2]).abs() < 1e-12,
+            "y = {y}"
+        );
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn bounded_rosenbrock_stays_in_box_and_reaches_kkt_point() {
+        let lo = dvector![-2.0, f64::NEG_INFINITY];
+        let hi = dvector![0.5, 3.0];
+        let p = BoxChecked {
+            inner: rosenbrock(),
+            lo: lo.clone(),
+            hi: hi.clone(),
+            evals: AtomicUsize::new(0),
+        };
+        let solver = LevenbergMarquardt::new()
+            .with_bounds(lo.clone(), hi.clone())
+            .unwrap();
+        let (res, rec) = solve(p, solver, dvector![-1.2, 1.0], 200);
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        let x = best(&res);
+        assert_eq!(x[0], 0.5, "x = {x}");
+        assert!((x[1] - 0.25).abs() < 1e-10, "x = {x}");
+        // KKT: free component stationary, bound component's gradient points out.
+        let prob = rosenbrock();
+        let g = prob.jacobian(&x).unwrap().tr_mul(&prob.apply(&x).unwrap());
+        assert!(g[1].abs() < 1e-8 && g[0] < 0.0, "g = {g}");
+        let params = rec.params.lock().unwrap();
+        assert!(params.len() > 2);
+        for q in params.iter() {
+            for j in 0..2 {
+                assert!(q[j] >= lo[j] && q[j] <= hi[j], "iterate {q} left the box");
+            }
+        }
+        let evals = res
+            .problem()
+            .problem
+            .as_ref()
+            .unwrap()
+            .evals
+            .load(Ordering::Relaxed);
+        assert!(evals > 2);
+        assert!(
+            rec.kvs
+                .lock()
+                .unwrap()
+                .iter()
+                .any(|kv| kv.get("n_fixed") == Some(&KvValue::Uint(1)))
+        );
+    }
+
+    #[test]
+    fn bounds_that_do_not_bind_leave_the_solution_alone() {
+        let lo = dvector![-5.0, -5.0];
+        let hi = dvector![5.0, 5.0];
+        let p = BoxChecked {
+            inner: rosenbrock(),
+            lo: lo.clone(),
+            hi: hi.clone(),
+            evals: AtomicUsize::new(0),
+        };
+        let solver = LevenbergMarquardt::new().with_bounds(lo, hi).unwrap();
+        let (res, _) = solve(p, solver, dvector![-1.2, 1.0], 200);
+        let x = best(&res);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-10 && (x[1] - 1.0).abs() < 1e-10,
+            "x = {x}"
+        );
+    }
+
+    #[test]
+    fn bounded_fit_with_start_on_bound_and_fixed_parameter() {
+        // Offset c is forced to stay ≥ 0.8 (truth 0.5); amplitude fixed at 2.5.
+        let (t, y) = exp_data(0.0);
+        let lo = dvector![2.5, 0.0, 0.8];
+        let hi = dvector![2.5, 10.0, f64::INFINITY];
+        let p = BoxChecked {
+            inner: exp_model(t.clone(), y.clone()),
+            lo: lo.clone(),
+            hi: hi.clone(),
+            evals: AtomicUsize::new(0),
+        };
+        let solver = LevenbergMarquardt::new().with_bounds(lo, hi).unwrap();
+        let (res, rec) = solve(p, solver, dvector![2.5, 0.0, 0.8], 300);
+        assert!(
+            LevenbergMarquardt::is_converged(&reason(&res)),
+            "{:?}",
+            reason(&res)
+        );
+        let x = best(&res);
+        assert_eq!(x[0], 2.5);
+        assert_eq!(x[2], 0.8);
+        let model = exp_model(t, y);
+        let g = model
+            .jacobian(&x)
+            .unwrap()
+            .tr_mul(&model.apply(&x).unwrap());
+        assert!(
+            g[2] > 0.0,
+            "c is held by its lower bound only if g_c > 0: g = {g}"
+        );
+        // Large-residual problem: Gauss–Newton converges linearly and ftol
+        // stops at ~√ftol relative accuracy, so check the cosine, not 1e-12.
+        let j = model.jacobian(&x).unwrap();
+        let cos_b = g[1].abs() / (j.column(1).norm() * model.apply(&x).unwrap().norm());
+        assert!(cos_b < 1e-6, "g = {g}, cos_b = {cos_b}");
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn non_finite_residuals_are_rejected_not_accepted() {
+        let nan_evals = Arc::new(AtomicUsize::new(0));
+        let counter = nan_evals.clone();
+        let p = Fun {
+            r: move |x: &Vector| {
+                if x.norm() > 2.0 {
+                    counter.fetch_add(1, Ordering::Relaxed);
+                    dvector![f64::NAN, 1.0]
+                } else {
+                    dvector![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]]
+                }
+            },
+            j: |x: &Vector| dmatrix![-20.0 * x[0], 10.0; -1.0, 0.0],
+        };
+        let solver = LevenbergMarquardt::new()
+            .with_initial_damping(1e-8)
+            .unwrap();
+        let (res, rec) = solve(p, solver, dvector![-1.2, 1.0], 300);
+        assert!(
+            nan_evals.load(Ordering::Relaxed) > 0,
+            "test must hit the NaN region"
+        );
+        let x = best(&res);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-10 && (x[1] - 1.0).abs() < 1e-10,
+            "x = {x}"
+        );
+        assert!(res.state().get_best_cost().is_finite());
+        for q in rec.params.lock().unwrap().iter() {
+            assert!(q.norm() <= 2.0, "accepted a point in the NaN region: {q}");
+        }
+        assert_no_nan(&rec);
+    }
+
+    #[test]
+    fn max_iters_is_reported() {
+        let (res, _) = solve(
+            rosenbrock(),
+            LevenbergMarquardt::new(),
+            dvector![-1.2, 1.0],
+            3,
+        );
+        assert_eq!(reason(&res), TerminationReason::MaxItersReached);
+        assert_eq!(res.state().get_iter(), 3);
+        assert!(!LevenbergMarquardt::is_converged(&reason(&res)));
+    }
+
+    #[test]
+    fn zero_residual_at_start_stops_immediately() {
+        let (res, _) = solve(
+            rosenbrock(),
+            LevenbergMarquardt::new(),
+            dvector![1.0, 1.0],
+            100,
+        );
+        assert_eq!(reason(&res), exit(LevenbergMarquardt::REASON_ZERO_RESIDUAL));
+        assert_eq!(res.state().get_iter(), 0);
+        assert_eq!(res.state().get_func_counts()["operator_count"], 1);
+    }
+
+    fn linear() -> Fun<impl Fn(&Vector) -> Vector, impl Fn(&Vector) -> Matrix> {
+        Fun {
+            r: |x: &Vector| dvector![x[0] - 1.0, 2.0 * x[1] + 3.0, x[0] + x[1] - 0.5],
+            j: |_: &Vector| dmatrix![1.0, 0.0; 0.0, 2.0; 1.0, 1.0],
+        }
+    }
+
+    #[test]
+    fn each_tolerance_path_is_reachable() {
+        let x0 = dvector![-1.2, 1.0];
+        let off = |s: LevenbergMarquardt| {
+            s.with_ftol(0.0)
+                .unwrap()
+                .with_xtol(0.0)
+                .unwrap()
+                .with_gtol(0.0)
+                .unwrap()
+        };
+
+        let xtol_only = off(LevenbergMarquardt::new()).with_xtol(1e-10).unwrap();
+        let (res, _) = solve(rosenbrock(), xtol_only, x0.clone(), 200);
+        assert_eq!(reason(&res), exit(LevenbergMarquardt::REASON_XTOL));
+        let x = best(&res);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-10 && (x[1] - 1.0).abs() < 1e-10,
+            "x = {x}"
+        );
+
+        // Non-zero-residual linear problem: F* > 0, so ftol and gtol can fire.
+        let ftol_only = off(LevenbergMarquardt::new()).with_ftol(1e-10).unwrap();
+        let (res, _) = solve(linear(), ftol_only, dvector![10.0, 10.0], 200);
+        assert_eq!(reason(&res), exit(LevenbergMarquardt::REASON_FTOL));
+
+        let gtol_only = off(LevenbergMarquardt::new()).with_gtol(1e-10).unwrap();
+        let (res, _) = solve(linear(), gtol_only, dvector![10.0, 10.0], 200);
+        assert_eq!(reason(&res), exit(LevenbergMarquardt::REASON_GTOL));
+        let p = best(&res);
+        let prob = linear();
+        assert!(gradient_cosine(&prob.jacobian(&p).unwrap(), &prob.apply(&p).unwrap()) <= 1e-10);
+    }
+
+    #[test]
+    fn target_cost_is_reported() {
+        let res = Executor::new(rosenbrock(), LevenbergMarquardt::new())
+            .configure(|s| {
+                s.param(dvector![-1.2, 1.0])
+                    .max_iters(200)
+                    .target_cost(1e-6)
+            })
+            .run()
+            .unwrap();
+        assert_eq!(reason(&res), TerminationReason::TargetCostReached);
+        assert!(res.state().get_best_cost() <= 1e-6);
+    }
+
+    /// Residual that is finite only at the exact starting point.
+    fn hostile() -> Fun<impl Fn(&Vector) -> Vector, impl Fn(&Vector) -> Matrix> {
+        Fun {
+            r: |x: &Vector| {
+                if x[0] == 3.0 {
+                    dvector![x[0] - 1.0]
+                } else {
+                    dvector![f64::INFINITY]
+                }
+            },
+            j: |_: &Vector| dmatrix![1.0],
+        }
+    }
+
+    #[test]
+    fn stalls_are_reported() {
+        let solver = LevenbergMarquardt::new().with_xtol(0.0).unwrap();
+        let (res, rec) = solve(hostile(), solver, dvector![3.0], 1000);
+        assert_eq!(reason(&res), exit(LevenbergMarquardt::REASON_STALL_DAMPING));
+        assert_eq!(best(&res)[0], 3.0);
+        assert!(!LevenbergMarquardt::is_converged(&reason(&res)));
+        assert_eq!(rec.accepted(), 0);
+        assert_no_nan(&rec);
+
+        let solver = LevenbergMarquardt::new()
+            .with_xtol(0.0)
+            .unwrap()
+            .with_max_rejections(4)
+            .unwrap();
+        let (res, _) = solve(hostile(), solver, dvector![3.0], 1000);
+        assert_eq!(
+            reason(&res),
+            exit(LevenbergMarquardt::REASON_STALL_REJECTIONS)
+        );
+        assert_eq!(res.state().get_iter(), 4);
+    }
+
+    #[test]
+    fn counters_and_kv() {
+        let (res, rec) = solve(
+            rosenbrock(),
+            LevenbergMarquardt::new(),
+            dvector![-1.2, 1.0],
+            200,
+        );
+        let counts = res.state().get_func_counts();
+        let accepted = rec.accepted();
+        assert!(accepted > 0);
+        assert!(
+            res.state().get_iter() > accepted,
+            "run must contain rejected steps to test that they skip J"
+        );
+        // One Jacobian at the start plus one per accepted step, none for rejections.
+        assert_eq!(counts["jacobian_count"], accepted + 1, "{counts:?}");
+        assert!(
+            counts["operator_count"] <= res.state().get_iter() + 1,
+            "{counts:?}"
+        );
+        let kvs = rec.kvs.lock().unwrap();
+        assert_eq!(kvs.len() as u64, res.state().get_iter() + 1);
+        for kv in kvs.iter().skip(1) {
+            for key in [
+                "mu",
+                "rho",
+                "step_norm",
+                "accepted",
+                "cost_trial",
+                "pred",
+                "gnorm",
+            ] {
+                assert!(kv.get(key).is_some(), "missing {key}");
+            }
+            assert!(kv.get("mu").unwrap().get_float().unwrap() > 0.0);
+        }
+    }
+
+    #[test]
+    fn setters_validate_input() {
+        let s = LevenbergMarquardt::new;
+        assert!(s().with_ftol(-1.0).is_err());
+        assert!(s().with_xtol(f64::NAN).is_err());
+        assert!(s().with_gtol(f64::INFINITY).is_err());
+        assert!(s().with_initial_damping(0.0).is_err());
+        assert!(s().with_initial_damping(f64::NAN).is_err());
+        assert!(s().with_max_rejections(0).is_err());
+        assert!(s().with_ftol(0.0).is_ok());
+        assert!(s().with_bounds(dvector![0.0], dvector![1.0, 2.0]).is_err());
+        assert!(s().with_bounds(dvector![2.0], dvector![1.0]).is_err());
+        assert!(s().with_bounds(dvector![f64::NAN], dvector![1.0]).is_err());
+        assert!(
+            s().with_bounds(dvector![f64::INFINITY], dvector![f64::INFINITY])
+                .is_err()
+        );
+        assert!(s().with_bounds(dvector![1.0], dvector![1.0]).is_ok());
+    }
+
+    #[test]
+    fn init_rejects_bad_start() {
+        let run = |solver: LevenbergMarquardt, x0: Vector| {
+            Executor::new(rosenbrock(), solver)
+                .configure(|s| s.param(x0).max_iters(10))
+                .run()
+        };
+        let boxed = || {
+            LevenbergMarquardt::new()
+                .with_bounds(dvector![0.0, 0.0], dvector![0.5, 1.0])
+                .unwrap()
+        };
+        assert!(
+            run(boxed(), dvector![-1.2, 1.0]).is_err(),
+            "start outside the box"
+        );
+        assert!(
+            run(boxed(), dvector![0.0, 0.0, 0.0]).is_err(),
+            "length mismatch"
+        );
+        assert!(run(LevenbergMarquardt::new(), dvector![f64::NAN, 0.0]).is_err());
+        assert!(run(boxed(), dvector![0.25, 1.0]).is_ok());
+        let no_param = Executor::new(rosenbrock(), LevenbergMarquardt::new())
+            .configure(|s| s.max_iters(10))
+            .run();
+        assert!(no_param.is_err());
+    }
+
+    #[test]
+    fn solver_can_be_reused() {
+        let solver = LevenbergMarquardt::new();
+        let (a, _) = solve(rosenbrock(), solver.clone(), dvector![-1.2, 1.0], 200);
+        let (b, _) = solve(rosenbrock(), a.solver().clone(), dvector![-1.2, 1.0], 200);
+        assert_eq!(a.state().get_iter(), b.state().get_iter());
+        assert_eq!(best(&a), best(&b));
+    }
+
+    #[test]
+    fn module_doc_example() -> Result<(), Error> {
+        struct Rosenbrock;
+
+        impl Operator for Rosenbrock {
+            type Param = DVector<f64>;
+            type Output = DVector<f64>;
+            fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, Error> {
+                Ok(dvector![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]])
+            }
+        }
+
+        impl Jacobian for Rosenbrock {
+            type Param = DVector<f64>;
+            type Jacobian = DMatrix<f64>;
+            fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, Error> {
+                Ok(dmatrix![-20.0 * x[0], 10.0; -1.0, 0.0])
+            }
+        }
+
+        let solver = LevenbergMarquardt::new().with_bounds(
+            dvector![f64::NEG_INFINITY, -1.0],
+            dvector![0.5, f64::INFINITY],
+        )?;
+        let res = Executor::new(Rosenbrock, solver)
+            .configure(|s| s.param(dvector![-1.2, 1.0]).max_iters(200))
+            .run()?;
+        let x = res.state().get_best_param().unwrap();
+        assert!((x[0] - 0.5).abs() < 1e-12 && (x[1] - 0.25).abs() < 1e-8);
+        assert!(LevenbergMarquardt::is_converged(
+            res.state().get_termination_reason().unwrap()
+        ));
+        Ok(())
+    }
+}

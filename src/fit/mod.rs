@@ -1,0 +1,3 @@
+//! Fitting the free parameters to the point pairs.
+
+pub mod lm;

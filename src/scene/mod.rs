@@ -1,0 +1,3 @@
+//! Scenes seen through the medium: objects as signed distance fields.
+
+pub mod sdf;
