@@ -15,3 +15,4 @@ pub mod medium;
 pub mod pair;
 pub mod scene;
 pub mod trace;
+pub mod plot;
