@@ -13,6 +13,6 @@ pub mod io;
 pub mod math;
 pub mod medium;
 pub mod pair;
+pub mod plot;
 pub mod scene;
 pub mod trace;
-pub mod plot;

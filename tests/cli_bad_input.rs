@@ -1,0 +1,351 @@
+//! Every kind of bad input in `problem-format.md` gets one clear message naming
+//! the file and the field, exit code 2, no panic, and no output file.
+
+use std::path::Path;
+use std::process::Command;
+
+const GOOD: &str = r#"{
+  "name": "t",
+  "medium": {
+    "scale": 1.0,
+    "background": { "n": 1.0, "a": 40.0 },
+    "inversion": { "n": 0.3, "a": 2.0, "height": 25.0 }
+  },
+  "free": ["background.a"],
+  "bounds": { "background.a": [1.0, 100.0] },
+  "pairs": [
+    { "origin": [0.0, 1.6, 0.0], "through": [0.0, 1.0, 900.0], "target": [0.0, 2.0, 900.0] }
+  ],
+  "trace": { "method": "rk4", "step": 2.0 },
+  "solver": { "method": "lm", "max_iterations": 50 }
+}"#;
+
+/// Runs `mirage trace` on `text`, asserts failure with code 2 and a message that
+/// names the file and contains every one of `expected`, and that no output (nor
+/// any temporary file) was left behind.
+fn rejects(text: &str, expected: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("problem.json");
+    std::fs::write(&input, text).unwrap();
+    let output = dir.path().join("out.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("trace")
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(
+        run.status.code(),
+        Some(2),
+        "exit code for {expected:?}; stderr: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.contains(&input.display().to_string()),
+        "file not named: {stderr}"
+    );
+    for e in expected {
+        assert!(stderr.contains(e), "{e:?} missing from: {stderr}");
+    }
+    assert_eq!(
+        stderr.trim().lines().count(),
+        1,
+        "one message, not several: {stderr}"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        left,
+        vec![std::ffi::OsString::from("problem.json")],
+        "files left behind"
+    );
+}
+
+fn edit(from: &str, to: &str) -> String {
+    assert!(
+        GOOD.contains(from),
+        "test bug: {from:?} not in the good problem"
+    );
+    GOOD.replacen(from, to, 1)
+}
+
+#[test]
+fn the_good_problem_is_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("problem.json");
+    std::fs::write(&input, GOOD).unwrap();
+    let output = dir.path().join("out.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .args([
+            "trace".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&output).unwrap()).unwrap();
+    assert_eq!(report["pairs"].as_array().unwrap().len(), 1);
+    assert!(report["objective"].as_f64().unwrap().is_finite());
+    // The report's medium can be fed back as a problem's medium.
+    let medium: mirage::medium::LogisticMedium =
+        serde_json::from_value(report["medium"].clone()).unwrap();
+    assert_eq!(medium.background.unwrap().a, 40.0);
+}
+
+#[test]
+fn malformed_or_truncated_json() {
+    rejects(&GOOD[..GOOD.len() / 2], &["truncated"]);
+    rejects(
+        &edit(r#""scale": 1.0,"#, r#""scale": ,"#),
+        &["medium.scale", "line"],
+    );
+}
+
+#[test]
+fn empty_file() {
+    rejects("", &["empty"]);
+    rejects("  \n ", &["empty"]);
+}
+
+#[test]
+fn top_level_not_an_object() {
+    rejects("[1, 2, 3]", &["top level", "object"]);
+    rejects("42", &["top level"]);
+}
+
+#[test]
+fn missing_field() {
+    rejects(
+        &edit(r#""name": "t","#, r#""name": "t", "pairs_": [],"#)
+            .replace(r#""pairs": ["#, r#""unused": ["#),
+        &["pairs_"],
+    );
+    let no_pairs: serde_json::Value = {
+        let mut v: serde_json::Value = serde_json::from_str(GOOD).unwrap();
+        v.as_object_mut().unwrap().remove("pairs");
+        v
+    };
+    rejects(&no_pairs.to_string(), &["missing field `pairs`"]);
+    rejects(
+        &edit(r#""n": 1.0, "a": 40.0"#, r#""n": 1.0"#),
+        &["medium.background", "missing field `a`"],
+    );
+    rejects(
+        &edit(r#""origin": [0.0, 1.6, 0.0], "#, ""),
+        &["pairs[0]", "missing field `origin`"],
+    );
+}
+
+#[test]
+fn unknown_field_is_named() {
+    rejects(
+        &edit(r#""height": 25.0"#, r#""heigth": 25.0"#),
+        &["medium.inversion", "heigth"],
+    );
+    rejects(
+        &edit(r#""name": "t","#, r#""name": "t", "colour": 1,"#),
+        &["colour"],
+    );
+    rejects(
+        &edit(r#""step": 2.0"#, r#""step": 2.0, "tol": 1"#),
+        &["trace", "tol"],
+    );
+}
+
+#[test]
+fn wrong_types() {
+    rejects(
+        &edit(r#""a": 40.0"#, r#""a": "forty""#),
+        &["medium.background.a", "invalid type"],
+    );
+    rejects(
+        &edit(r#""origin": [0.0, 1.6, 0.0]"#, r#""origin": [0.0, 1.6]"#),
+        &["pairs[0].origin", "length"],
+    );
+    rejects(
+        &edit(r#""free": ["background.a"]"#, r#""free": "background.a""#),
+        &["free", "invalid type"],
+    );
+}
+
+#[test]
+fn number_out_of_range() {
+    rejects(
+        &edit(r#""a": 40.0"#, r#""a": 1e400"#),
+        &["medium.background.a", "out of range"],
+    );
+}
+
+#[test]
+fn zero_rate_and_all_amplitudes_zero() {
+    rejects(
+        &edit(r#""a": 40.0"#, r#""a": 0.0"#),
+        &["medium.background.a", "zero"],
+    );
+    rejects(
+        &edit(r#""n": 1.0, "a": 40.0"#, r#""n": 0.0, "a": 40.0"#)
+            .replace(r#""n": 0.3"#, r#""n": 0"#),
+        &["medium.background.n", "amplitudes are zero"],
+    );
+}
+
+#[test]
+fn scale_that_would_make_n_negative() {
+    rejects(
+        &edit(r#""scale": 1.0"#, r#""scale": 1000.0"#),
+        &["medium.scale"],
+    );
+}
+
+#[test]
+fn degenerate_pairs() {
+    rejects(
+        &edit(
+            r#""target": [0.0, 2.0, 900.0]"#,
+            r#""target": [0.0, 50.0, 0.0]"#,
+        ),
+        &["pairs[0].target", "straight above or below"],
+    );
+    rejects(
+        &edit(
+            r#""through": [0.0, 1.0, 900.0]"#,
+            r#""through": [0.0, 1.6, 0.0]"#,
+        ),
+        &["pairs[0].through", "equals"],
+    );
+    rejects(
+        &edit(
+            r#""target": [0.0, 2.0, 900.0] }"#,
+            r#""target": [0.0, 2.0, 900.0], "weight": -1 }"#,
+        ),
+        &["pairs[0].weight"],
+    );
+}
+
+#[test]
+fn free_names_that_are_not_parameters_of_this_medium() {
+    rejects(
+        &edit(
+            r#""free": ["background.a"]"#,
+            r#""free": ["hotspots[0].x"]"#,
+        )
+        .replace(r#""bounds": { "background.a": [1.0, 100.0] },"#, ""),
+        &["free[0]", "no hot spots"],
+    );
+    rejects(
+        &edit(
+            r#""free": ["background.a"]"#,
+            r#""free": ["inversion.heigth"]"#,
+        )
+        .replace(r#""bounds": { "background.a": [1.0, 100.0] },"#, ""),
+        &["free[0]", "inversion.heigth"],
+    );
+    rejects(
+        &edit(
+            r#""free": ["background.a"]"#,
+            r#""free": ["background.a", "background.a"]"#,
+        ),
+        &["free[1]", "twice"],
+    );
+}
+
+#[test]
+fn bad_bounds() {
+    rejects(
+        &edit("[1.0, 100.0]", "[100.0, 1.0]"),
+        &["bounds.background.a", "above"],
+    );
+    rejects(
+        &edit("[1.0, 100.0]", "[50.0, 100.0]"),
+        &["bounds.background.a", "outside its bounds"],
+    );
+    rejects(
+        &edit(
+            r#""bounds": { "background.a""#,
+            r#""bounds": { "inversion.a""#,
+        ),
+        &["bounds.inversion.a", "not a free parameter"],
+    );
+}
+
+#[test]
+fn free_parameters_with_no_pairs() {
+    let mut v: serde_json::Value = serde_json::from_str(GOOD).unwrap();
+    v["pairs"] = serde_json::json!([]);
+    rejects(&v.to_string(), &["pairs", "no point pairs"]);
+}
+
+#[test]
+fn bad_trace_and_solver_settings() {
+    rejects(
+        &edit(r#""method": "rk4""#, r#""method": "rk5""#),
+        &["trace.method", "rk5"],
+    );
+    rejects(
+        &edit(r#""method": "lm""#, r#""method": "bfgs""#),
+        &["solver.method", "bfgs"],
+    );
+    rejects(
+        &edit(r#""step": 2.0"#, r#""step": 0.0"#),
+        &["trace.step", "> 0"],
+    );
+    rejects(&edit(r#""step": 2.0"#, r#""step": -1.0"#), &["trace.step"]);
+    rejects(
+        &edit(
+            r#""method": "rk4", "step": 2.0"#,
+            r#""method": "dopri5", "tolerance": -1e-9"#,
+        ),
+        &["trace.tolerance"],
+    );
+    rejects(
+        &edit(
+            r#""method": "rk4", "step": 2.0"#,
+            r#""method": "dopri5", "step": 2.0"#,
+        ),
+        &["trace.step", "not a parameter"],
+    );
+    rejects(
+        &edit(r#""max_iterations": 50"#, r#""max_iterations": -5"#),
+        &["solver.max_iterations"],
+    );
+}
+
+#[test]
+fn missing_input_file() {
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .args(["trace", "/nonexistent/problem.json"])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("/nonexistent/problem.json"));
+}
+
+#[test]
+fn an_input_is_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("problem.json");
+    std::fs::write(&input, GOOD).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .args([
+            "trace".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            input.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(&input).unwrap(), GOOD);
+    assert!(Path::new(&input).exists());
+}
