@@ -2,5 +2,6 @@
 
 pub mod history;
 pub mod lm;
+pub mod objective;
 
 pub use history::{History, IterationRecord, RunHistory};
