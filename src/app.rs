@@ -74,3 +74,174 @@ fn describe_trace(problem: &Problem) -> String {
         _ => t.method.clone(),
     }
 }
+
+/// Options of `mirage fit` beyond the problem file.
+#[derive(Clone, Debug, Default)]
+pub struct FitOptions {
+    /// Write the JSON result here.
+    pub output: Option<std::path::PathBuf>,
+    /// Draw the convergence plot here (`.png` or `.svg`).
+    pub plot: Option<std::path::PathBuf>,
+    /// Draw the ray diagram of the fitted medium here.
+    pub rays: Option<std::path::PathBuf>,
+    /// Override the problem's solver method (`lm`, `nelder-mead`, `auto`).
+    pub method: Option<String>,
+    /// Show a progress line on stderr (only drawn on a terminal).
+    pub progress: bool,
+}
+
+/// `mirage fit`: fits the free parameters, prints a summary, writes the result
+/// and plots. All outputs are checked before the fit and written atomically.
+pub fn fit(problem_path: &Path, options: &FitOptions) -> Result<crate::io::report::FitReport> {
+    let mut problem = Problem::load(problem_path)?;
+    if let Some(m) = &options.method {
+        let spec = crate::io::problem::SolverSpec {
+            method: m.clone(),
+            ..Default::default()
+        };
+        problem.solver.method =
+            crate::io::problem::solver_settings(&spec, Path::new("<command line>"))
+                .map_err(|e| match e {
+                    crate::error::Error::Input { file, message, .. } => {
+                        crate::error::Error::Input {
+                            file,
+                            field: "--method".into(),
+                            message,
+                        }
+                    }
+                    other => other,
+                })?
+                .method;
+    }
+    for out in [&options.output, &options.plot, &options.rays]
+        .into_iter()
+        .flatten()
+    {
+        check_not_input(out, &[problem_path])?;
+    }
+    for plot in [&options.plot, &options.rays].into_iter().flatten() {
+        crate::plot::ImageFormat::from_path(plot)?;
+    }
+    let bar = options.progress.then(|| {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} {elapsed:>4} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        );
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        bar
+    });
+    let hook: Option<crate::fit::solve::IterateHook> = bar.clone().map(|bar| {
+        std::sync::Arc::new(move |label: &str, rec: &crate::fit::IterationRecord| {
+            bar.set_message(format!(
+                "{label}: iteration {} F = {:.3e} m²",
+                rec.iteration, rec.objective
+            ));
+        }) as crate::fit::solve::IterateHook
+    });
+    let report = crate::fit::fit(&problem, hook);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let report = report?;
+    if let Some(out) = &options.output {
+        write_json(out, &report)?;
+    }
+    if let Some(plot) = &options.plot {
+        crate::plot::draw_convergence(&report.history, plot)?;
+    }
+    if let Some(rays) = &options.rays {
+        crate::plot::draw_rays(&problem, &report.medium, rays)?;
+    }
+    print!("{}", fit_summary(&problem, &report));
+    Ok(report)
+}
+
+/// The terminal summary of a fit.
+pub fn fit_summary(problem: &Problem, r: &crate::io::report::FitReport) -> String {
+    let mut s = String::new();
+    let sv = &r.solver;
+    let _ = writeln!(
+        s,
+        "{}: {} free parameter(s), {} pair(s), trace {}",
+        r.problem,
+        r.parameters.len(),
+        r.pairs.len(),
+        describe_trace(problem)
+    );
+    let _ = writeln!(
+        s,
+        "solver {:?} ({} run(s), best: {}): {} iterations, {} residual + {} Jacobian evaluations, {:.3} s",
+        sv.method,
+        r.runs.len(),
+        sv.best_run,
+        sv.iterations,
+        sv.residual_evaluations,
+        sv.jacobian_evaluations,
+        sv.wall_time_s
+    );
+    let _ = writeln!(s, "stopped: {}", sv.stop_reason);
+    let _ = writeln!(
+        s,
+        "objective F = {:.6e} m² ({} target {:.1e})   summed distance = {:.4e} m   largest = {:.4e} m",
+        r.totals.objective,
+        if sv.reached_target { "meets" } else { "ABOVE" },
+        sv.target_objective,
+        r.totals.summed_distance,
+        r.totals.max_distance
+    );
+    if !r.parameters.is_empty() {
+        let _ = writeln!(
+            s,
+            "{:<24} {:>14} {:>16} {:>12}",
+            "parameter", "start", "fitted", "std. error"
+        );
+        for p in &r.parameters {
+            let se = match p.standard_error {
+                Some(e) => format!("{e:.3e}"),
+                None => "undetermined".into(),
+            };
+            let _ = writeln!(
+                s,
+                "{:<24} {:>14.6} {:>16.9} {:>12}{}",
+                p.name,
+                p.start,
+                p.value,
+                se,
+                if p.at_bound { "  (at bound)" } else { "" }
+            );
+        }
+    }
+    for u in &r.undetermined {
+        let combo: Vec<String> = u
+            .combination
+            .iter()
+            .map(|(n, w)| format!("{w:+.3}·{n}"))
+            .collect();
+        let _ = writeln!(s, "undetermined: {}\n  {}", combo.join(" "), u.note);
+    }
+    let flagged: Vec<String> = r
+        .pairs
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.occluded || p.unreachable)
+        .map(|(i, p)| {
+            format!(
+                "pair {i}{}{}",
+                if p.occluded { " occluded" } else { "" },
+                if p.unreachable { " unreachable" } else { "" }
+            )
+        })
+        .collect();
+    if !flagged.is_empty() {
+        let _ = writeln!(s, "flags: {}", flagged.join(", "));
+    }
+    s
+}
+
+/// `mirage rays`: the ray diagram of a problem's pairs through its medium.
+pub fn rays(problem_path: &Path, output: &Path) -> Result<()> {
+    let problem = Problem::load(problem_path)?;
+    check_not_input(output, &[problem_path])?;
+    crate::plot::draw_rays(&problem, &problem.medium, output)
+}

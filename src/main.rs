@@ -11,6 +11,9 @@ use std::process::ExitCode;
     about = "Inverse design of atmospheric mirages"
 )]
 struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -25,6 +28,34 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Fit the free parameters so that every pair's ray lands on its target.
+    Fit {
+        /// Problem file (JSON).
+        problem: PathBuf,
+        /// Write the JSON result here.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Convergence plot (.png or .svg).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Ray diagram of the fitted medium (.png or .svg).
+        #[arg(long)]
+        rays: Option<PathBuf>,
+        /// Solver: lm, nelder-mead or auto (overrides the problem file).
+        #[arg(long)]
+        method: Option<String>,
+        /// No progress line.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Draw the ray diagram of a problem's pairs through its medium.
+    Rays {
+        /// Problem file (JSON).
+        problem: PathBuf,
+        /// Output image (.png or .svg).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -36,10 +67,38 @@ fn main() -> ExitCode {
             return ExitCode::from(e.exit_code().clamp(0, 255) as u8);
         }
     };
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            eprintln!("error: <command line>: --threads: must be at least 1");
+            return ExitCode::from(2);
+        }
+        // Only fails if a pool already exists, which cannot happen here.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global();
+    }
     let result = match &cli.command {
         Command::Trace { problem, output } => {
             mirage::app::trace(problem, output.as_deref()).map(|_| ())
         }
+        Command::Fit {
+            problem,
+            output,
+            plot,
+            rays,
+            method,
+            quiet,
+        } => {
+            let options = mirage::app::FitOptions {
+                output: output.clone(),
+                plot: plot.clone(),
+                rays: rays.clone(),
+                method: method.clone(),
+                progress: !quiet,
+            };
+            mirage::app::fit(problem, &options).map(|_| ())
+        }
+        Command::Rays { problem, output } => mirage::app::rays(problem, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,7 +1,105 @@
-//! Fitting the free parameters to the point pairs.
+//! Fitting the free parameters to the point pairs: the residual map with exact
+//! Jacobians ([`objective`]), Levenberg–Marquardt as an argmin solver ([`lm`]),
+//! the strategies that run it and Nelder–Mead ([`solve`]), and what the pairs
+//! cannot determine ([`identify`]).
 
 pub mod history;
+pub mod identify;
 pub mod lm;
 pub mod objective;
+pub mod solve;
+pub mod synthetic;
 
 pub use history::{History, IterationRecord, RunHistory};
+
+use crate::error::{Error, Result};
+use crate::io::Problem;
+use crate::io::report::{FitReport, ParamReport, RunReport, SolverReport, trace_pairs};
+use objective::Objective;
+use solve::IterateHook;
+use std::time::Instant;
+
+/// Fits `problem`'s free parameters and reports everything `problem-format.md`
+/// asks of a result. `hook` sees every iterate (progress display, tests).
+pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
+    let started = Instant::now();
+    let objective = Objective::from_problem(problem);
+    let settings = &problem.solver;
+    let solution = solve::solve(
+        &objective,
+        settings,
+        &problem.bounds,
+        settings.target_objective,
+        hook,
+    )
+    .map_err(Error::Failed)?;
+    let medium = objective.medium(&solution.x);
+    let (_, jac) = objective.jacobian(&solution.x);
+    let ident = identify::analyse(&jac, &solution.x, &problem.free, solution.objective);
+    let traced = trace_pairs(problem, &medium);
+    let wall_time_s = started.elapsed().as_secs_f64();
+    let (residuals, jacobians, rhs) = objective.counts();
+
+    let x0 = objective.start();
+    let parameters = problem
+        .free
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let (lo, hi) = problem.bounds[k];
+            let bounded = lo.is_finite() || hi.is_finite();
+            let v = solution.x[k];
+            ParamReport {
+                name: p.to_string(),
+                start: x0[k],
+                value: v,
+                standard_error: ident.params[k].standard_error,
+                determined: ident.params[k].determined,
+                bounds: bounded.then_some([lo, hi]),
+                at_bound: v == lo || v == hi,
+            }
+        })
+        .collect();
+    let best = &solution.runs[solution.best_run];
+    let report = FitReport {
+        problem: problem.name.clone(),
+        medium,
+        parameters,
+        undetermined: ident.undetermined,
+        standard_errors_scaled: ident.scaled_by_residual_variance,
+        totals: traced.totals,
+        pairs: traced.pairs,
+        solver: SolverReport {
+            method: settings.method,
+            best_run: best.label.clone(),
+            iterations: solution.runs.iter().map(|r| r.iterations).sum(),
+            residual_evaluations: residuals,
+            jacobian_evaluations: jacobians,
+            rhs_evaluations: rhs,
+            wall_time_s,
+            stop_reason: best.reason.clone(),
+            converged: best.converged,
+            reached_target: traced.totals.objective <= settings.target_objective,
+            target_objective: settings.target_objective,
+        },
+        runs: solution
+            .runs
+            .iter()
+            .map(|r| RunReport {
+                label: r.label.clone(),
+                start: r.start.clone(),
+                end: r.end.clone(),
+                objective: r.objective,
+                iterations: r.iterations,
+                stop_reason: r.reason.clone(),
+                converged: r.converged,
+            })
+            .collect(),
+        history: History {
+            param_names: problem.free.iter().map(|p| p.to_string()).collect(),
+            runs: solution.runs.into_iter().map(|r| r.history).collect(),
+        },
+        trace: problem.trace_spec.clone(),
+    };
+    Ok(report)
+}

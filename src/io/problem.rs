@@ -22,7 +22,7 @@
 //! | `bounds` | optional `[low, high]` per free parameter |
 //! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight` |
 //! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
-//! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed` |
+//! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12) |
 
 use crate::error::{Error, Result};
 use crate::medium::{LogisticMedium, Param};
@@ -90,6 +90,10 @@ pub struct SolverSpec {
     /// Seed of the starting points (restarts are reproducible).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// Objective F (m²) below which a fit counts as reaching its targets; above
+    /// it, `auto` restarts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_objective: Option<f64>,
 }
 
 fn default_solver() -> String {
@@ -106,6 +110,7 @@ impl Default for SolverSpec {
             xtol: None,
             gtol: None,
             seed: None,
+            target_objective: None,
         }
     }
 }
@@ -140,6 +145,8 @@ pub struct SolverSettings {
     pub gtol: f64,
     /// Seed of the restart points.
     pub seed: u64,
+    /// F (m²) below which the targets count as reached.
+    pub target_objective: f64,
 }
 
 /// The problem file exactly as written.
@@ -415,6 +422,7 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         xtol: tol("xtol", spec.xtol, 1e-12)?,
         gtol: tol("gtol", spec.gtol, 1e-15)?,
         seed: spec.seed.unwrap_or(0x6d69_7261_6765),
+        target_objective: tol("target_objective", spec.target_objective, 1e-12)?,
     })
 }
 

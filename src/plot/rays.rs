@@ -1,0 +1,589 @@
+//! The ray diagram of a problem: every pair's traced ray in side view, beside
+//! the refractivity profile δ(y) that bends it.
+
+use super::{
+    AXIS_LABEL_SIZE, DrawResult, Figure, GRID, INK, LegendEntry, MUTED, Marker, PANEL_TITLE_SIZE,
+    Span, Swatch, TICK_SIZE, draw_dashed, draw_header, draw_legend, draw_marker, draw_placeholder,
+    format_sig, legend_height, save, series_color, text,
+};
+use crate::error::Result;
+use crate::io::Problem;
+use crate::io::report::pair_report;
+use crate::math::V3;
+use crate::medium::{IndexField, LogisticMedium};
+use crate::trace::RayState;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+const SIZE: (u32, u32) = (1400, 700);
+/// Share of the width given to the side view; the profile gets the rest.
+const SIDE_SHARE: f64 = 0.72;
+/// Heights sampled for the profile curves.
+const PROFILE_SAMPLES: usize = 400;
+
+const GROUND_FILL: RGBColor = RGBColor(238, 229, 212);
+const GROUND_LINE: RGBColor = RGBColor(140, 110, 70);
+const SIGHT: RGBColor = RGBColor(150, 150, 150);
+/// Colours of the hot spots (their profile curves and ground bands), kept apart
+/// from the pair palette so a hot spot is never mistaken for a ray.
+const HOT_COLORS: [RGBColor; 4] = [
+    RGBColor(217, 95, 2),
+    RGBColor(231, 41, 138),
+    RGBColor(102, 166, 30),
+    RGBColor(166, 118, 29),
+];
+
+fn hot_color(j: usize) -> RGBColor {
+    HOT_COLORS[j % HOT_COLORS.len()]
+}
+
+/// `c` mixed with white (`t` = 0: `c`, 1: white): opaque stand-in for
+/// transparency, which renders the same in PNG and SVG.
+fn tint(c: RGBColor, t: f64) -> RGBColor {
+    let m = |v: u8| (v as f64 + (255.0 - v as f64) * t).round() as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
+/// Draws the ray diagram of `problem` with `medium`: a side view of every pair's
+/// traced ray (with its line of sight, origin, `through`, target and endpoint)
+/// and, beside it on the same heights, δ(y) above the first pair's origin and
+/// over each hot spot centre. The format follows the extension of `output`
+/// (`.png` or `.svg`); the file is written atomically.
+pub fn draw_rays(problem: &Problem, medium: &LogisticMedium, output: &Path) -> Result<()> {
+    // Refuse a bad extension before spending time on tracing.
+    super::ImageFormat::from_path(output)?;
+    let figure = RayFigure::new(problem, medium);
+    save(&figure, output)
+}
+
+/// One pair in side-view coordinates: (distance along the view, height).
+struct PairView {
+    label: String,
+    color: RGBColor,
+    ray: Vec<(f64, f64)>,
+    origin: (f64, f64),
+    through: (f64, f64),
+    target: (f64, f64),
+    endpoint: (f64, f64),
+    sight: [(f64, f64); 2],
+}
+
+/// A δ(y) curve of the profile panel: (δ·10⁶, y).
+struct Profile {
+    label: String,
+    color: RGBColor,
+    dashed: bool,
+    points: Vec<(f64, f64)>,
+}
+
+/// Where pair 0's view passes over a hot spot, as a range of view distance.
+struct HotBand {
+    label: String,
+    color: RGBColor,
+    from: f64,
+    to: f64,
+}
+
+struct RayFigure {
+    title: String,
+    method: String,
+    pairs: Vec<PairView>,
+    bands: Vec<HotBand>,
+    profiles: Vec<Profile>,
+    x: (f64, f64),
+    y: (f64, f64),
+    delta: (f64, f64),
+}
+
+/// Unit horizontal direction from `origin` toward `target` (the target plane's
+/// normal), and the view distance of a point along it.
+struct ViewFrame {
+    origin: V3,
+    along: V3,
+}
+
+impl ViewFrame {
+    fn distance(&self, p: V3) -> f64 {
+        (p.x - self.origin.x) * self.along.x + (p.z - self.origin.z) * self.along.z
+    }
+    fn project(&self, p: V3) -> (f64, f64) {
+        (self.distance(p), p.y)
+    }
+}
+
+fn describe_method(problem: &Problem) -> String {
+    let spec = &problem.trace_spec;
+    let mut s = match (spec.method.as_str(), spec.step, spec.tolerance) {
+        ("rk4", Some(step), _) => format!("traced with RK4, step {} m", format_sig(step, 3)),
+        ("dopri5", _, Some(tol)) => format!(
+            "traced with Dormand–Prince 5(4), tolerance {}",
+            format_sig(tol, 2)
+        ),
+        (m, _, _) => format!("traced with {m}"),
+    };
+    if let Some(l) = spec.max_length {
+        s.push_str(&format!(", max length {} m", format_sig(l, 3)));
+    }
+    s
+}
+
+impl RayFigure {
+    fn new(problem: &Problem, medium: &LogisticMedium) -> RayFigure {
+        use rayon::prelude::*;
+        let field = medium.field();
+        let traced: Vec<_> = problem
+            .pairs
+            .par_iter()
+            .map(|pair| {
+                let mut path: Vec<RayState> = Vec::new();
+                let report = pair_report(pair, &field, &problem.trace, Some(&mut path));
+                (report, path)
+            })
+            .collect();
+
+        let mut pairs = Vec::with_capacity(traced.len());
+        let mut objective = 0.0;
+        for (i, (pair, (report, path))) in problem.pairs.iter().zip(traced).enumerate() {
+            objective += 0.5 * report.residual.iter().map(|r| r * r).sum::<f64>();
+            let frame = ViewFrame {
+                origin: pair.origin(),
+                along: pair.plane().normal,
+            };
+            let origin = frame.project(pair.origin());
+            let target = frame.project(pair.target());
+            let through = frame.project(V3::from(pair.through));
+            // The line of sight runs straight to the target plane; a sight that
+            // does not approach the plane is drawn only to `through`.
+            let run = through.0 - origin.0;
+            let sight_end = if run > 0.0 {
+                let y = origin.1 + (through.1 - origin.1) * (target.0 - origin.0) / run;
+                (target.0, y)
+            } else {
+                through
+            };
+            let mut flags = Vec::new();
+            if report.occluded {
+                flags.push("occluded");
+            }
+            if report.unreachable {
+                flags.push("unreachable");
+            }
+            let mut label = format!("pair {i}: misses by {} m", format_sig(report.distance, 2));
+            if !flags.is_empty() {
+                label.push_str(&format!(" ({})", flags.join(", ")));
+            }
+            pairs.push(PairView {
+                label,
+                color: series_color(i),
+                ray: path
+                    .iter()
+                    .map(|s| frame.project(s.x))
+                    .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    .collect(),
+                origin,
+                through,
+                target,
+                endpoint: frame.project(V3::from(report.endpoint)),
+                sight: [origin, sight_end],
+            });
+        }
+
+        // The x range comes from where rays go and what they must hit; `through`
+        // can lie far beyond and is drawn only when it falls inside.
+        let mut xs = Span::EMPTY;
+        xs.include(0.0);
+        for p in &pairs {
+            for q in p.ray.iter().chain([&p.origin, &p.target, &p.endpoint]) {
+                xs.include(q.0);
+            }
+        }
+        let x = xs.padded(0.03, (0.0, 100.0));
+
+        // Heights from the data alone: mirage bends are metres over kilometres,
+        // so tying the y range to the x range would flatten every ray.
+        let mut ys = Span::EMPTY;
+        for p in &pairs {
+            for q in p.ray.iter().chain([&p.origin, &p.target, &p.endpoint]) {
+                ys.include(q.1);
+            }
+            for q in p.sight {
+                ys.include(q.1);
+            }
+            if (x.0..=x.1).contains(&p.through.0) {
+                ys.include(p.through.1);
+            }
+        }
+        // Show the ground when the scene is near it (within its own height).
+        if !ys.is_empty() && ys.lo > 0.0 && ys.lo <= ys.width().max(1.0) {
+            ys.include(0.0);
+        }
+        let fallback_y = (-1.0, 10.0);
+        let y = ys.padded(0.08, fallback_y);
+
+        // Hot spot extent under pair 0's view: solve |o + s·u − c| = R.
+        let mut bands = Vec::new();
+        if let Some(pair) = problem.pairs.first() {
+            let o = pair.origin();
+            let u = pair.plane().normal;
+            for (j, h) in medium.hotspots.iter().enumerate() {
+                let (dx, dz) = (o.x - h.x, o.z - h.z);
+                let b = dx * u.x + dz * u.z;
+                let c = dx * dx + dz * dz - h.radius * h.radius;
+                let disc = b * b - c;
+                if disc > 0.0 {
+                    let r = disc.sqrt();
+                    let (from, to) = ((-b - r).max(x.0), (-b + r).min(x.1));
+                    if from < to {
+                        bands.push(HotBand {
+                            label: format!("hotspots[{j}] under pair 0's view"),
+                            color: tint(hot_color(j), 0.45),
+                            from,
+                            to,
+                        });
+                    }
+                }
+            }
+        }
+
+        // δ(y) columns: above pair 0's origin (what its ray starts in), and over
+        // each hot spot centre (where the mirage is made).
+        let (px, pz, where_) = match problem.pairs.first() {
+            Some(p) => (
+                p.origin[0],
+                p.origin[2],
+                "above pair 0's origin".to_string(),
+            ),
+            None => (0.0, 0.0, "at x = 0, z = 0".to_string()),
+        };
+        let heights: Vec<f64> = (0..=PROFILE_SAMPLES)
+            .map(|k| y.0 + (y.1 - y.0) * k as f64 / PROFILE_SAMPLES as f64)
+            .collect();
+        let column = |cx: f64, cz: f64| -> Vec<(f64, f64)> {
+            heights
+                .iter()
+                .map(|&h| (field.delta(V3::new(cx, h, cz)) * 1e6, h))
+                .filter(|p| p.0.is_finite())
+                .collect()
+        };
+        let mut profiles = vec![Profile {
+            label: format!("δ {where_}"),
+            color: INK,
+            dashed: false,
+            points: column(px, pz),
+        }];
+        for (j, h) in medium.hotspots.iter().enumerate() {
+            profiles.push(Profile {
+                label: format!("δ over hotspots[{j}]"),
+                color: hot_color(j),
+                dashed: true,
+                points: column(h.x, h.z),
+            });
+        }
+        let mut ds = Span::EMPTY;
+        for p in &profiles {
+            for q in &p.points {
+                ds.include(q.0);
+            }
+        }
+        if !ds.is_empty() && ds.lo > 0.0 && ds.lo < 0.25 * ds.hi {
+            // A profile that starts near zero reads better against zero.
+            ds.include(0.0);
+        }
+        let delta = ds.padded(0.06, (-1.0, 1.0));
+
+        let mut method = describe_method(problem);
+        if !pairs.is_empty() {
+            method.push_str(&format!(
+                "   ·   F = ½ Σ |r|² = {} m²",
+                format_sig(objective, 3)
+            ));
+        }
+        RayFigure {
+            title: problem.name.clone(),
+            method,
+            pairs,
+            bands,
+            profiles,
+            x,
+            y,
+            delta,
+        }
+    }
+
+    fn side_legend(&self) -> Vec<LegendEntry> {
+        let mut out: Vec<LegendEntry> = self
+            .pairs
+            .iter()
+            .map(|p| LegendEntry::new(Swatch::Line(p.color, 3), p.label.clone()))
+            .collect();
+        if !self.pairs.is_empty() {
+            out.push(LegendEntry::new(
+                Swatch::Dashed(SIGHT),
+                "straight line of sight",
+            ));
+            out.push(LegendEntry::new(
+                Swatch::Marker(Marker::Circle, INK),
+                "origin",
+            ));
+            out.push(LegendEntry::new(
+                Swatch::Marker(Marker::Triangle, INK),
+                "through",
+            ));
+            out.push(LegendEntry::new(
+                Swatch::Marker(Marker::Star, MUTED),
+                "target",
+            ));
+            out.push(LegendEntry::new(
+                Swatch::Marker(Marker::Cross, INK),
+                "endpoint",
+            ));
+        }
+        for b in &self.bands {
+            out.push(LegendEntry::new(Swatch::Band(b.color), b.label.clone()));
+        }
+        out
+    }
+
+    fn profile_legend(&self) -> Vec<LegendEntry> {
+        self.profiles
+            .iter()
+            .map(|p| {
+                let swatch = if p.dashed {
+                    Swatch::Dashed(p.color)
+                } else {
+                    Swatch::Line(p.color, 2)
+                };
+                LegendEntry::new(swatch, p.label.clone())
+            })
+            .collect()
+    }
+}
+
+/// Space reserved around both panels' plotting areas; equal on both sides so
+/// their height axes line up pixel for pixel.
+const X_LABEL_AREA: u32 = 52;
+const CHART_TOP: u32 = 8;
+const SIDE_Y_LABEL_AREA: u32 = 72;
+const PROFILE_Y_LABEL_AREA: u32 = 62;
+
+impl Figure for RayFigure {
+    fn size(&self) -> (u32, u32) {
+        SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (header, body) = root.split_vertically(70);
+        let (w, _) = body.dim_in_pixel();
+        let side_w = (w as f64 * SIDE_SHARE).round() as u32;
+        let side_legend = self.side_legend();
+        let profile_legend = self.profile_legend();
+        let legend_h = legend_height(&side_legend, (side_w - SIDE_Y_LABEL_AREA - 20) as i32)
+            .max(legend_height(
+                &profile_legend,
+                (w - side_w - PROFILE_Y_LABEL_AREA - 20) as i32,
+            ))
+            .max(30);
+        let (_, body_h) = body.dim_in_pixel();
+        let (charts, legends) = body.split_vertically(body_h.saturating_sub(legend_h as u32));
+        let (side_area, profile_area) = charts.split_horizontally(side_w);
+        let (side_legend_area, profile_legend_area) = legends.split_horizontally(side_w);
+
+        let exaggeration = self.draw_side(&side_area)?;
+        self.draw_profile(&profile_area)?;
+        draw_legend(
+            &side_legend_area,
+            &side_legend,
+            (SIDE_Y_LABEL_AREA + 10) as i32,
+        )?;
+        draw_legend(
+            &profile_legend_area,
+            &profile_legend,
+            (PROFILE_Y_LABEL_AREA + 10) as i32,
+        )?;
+
+        let mut subtitle = self.method.clone();
+        if let Some(note) = exaggeration {
+            subtitle.push_str(&format!("   ·   {note}"));
+        }
+        draw_header(&header, &self.title, &subtitle)?;
+        Ok(())
+    }
+}
+
+impl RayFigure {
+    /// Draws the side view; returns a note on the vertical scale when heights
+    /// are drawn at a different scale from distances.
+    fn draw_side<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<Option<String>, DrawingAreaErrorKind<DB::ErrorType>> {
+        let (x, y) = (self.x, self.y);
+        let mut chart = ChartBuilder::on(area)
+            .margin_top(CHART_TOP)
+            .margin_left(10)
+            .margin_right(24)
+            .caption(
+                "side view along each pair's line of sight",
+                text(PANEL_TITLE_SIZE, INK),
+            )
+            .x_label_area_size(X_LABEL_AREA)
+            .y_label_area_size(SIDE_Y_LABEL_AREA)
+            .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
+
+        // Pixels per metre vertically over pixels per metre horizontally.
+        let (pw, ph) = chart.plotting_area().dim_in_pixel();
+        let ratio = (ph as f64 / (y.1 - y.0)) / (pw as f64 / (x.1 - x.0));
+        let (y_desc, note) = if ratio > 2.0 {
+            (
+                "height (m, exaggerated)",
+                Some(format!("heights exaggerated {}×", format_sig(ratio, 2))),
+            )
+        } else if ratio < 0.5 {
+            (
+                "height (m, compressed)",
+                Some(format!(
+                    "heights compressed {}×",
+                    format_sig(1.0 / ratio, 2)
+                )),
+            )
+        } else {
+            ("height (m)", None)
+        };
+
+        chart
+            .configure_mesh()
+            .x_desc("distance along the view (m)")
+            .y_desc(y_desc)
+            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
+            .label_style(text(TICK_SIZE, INK))
+            .bold_line_style(GRID)
+            .light_line_style(TRANSPARENT)
+            .axis_style(MUTED)
+            .x_label_formatter(&|v| format_sig(*v, 4))
+            .y_label_formatter(&|v| format_sig(*v, 4))
+            .draw()?;
+        let plot = chart.plotting_area().clone();
+
+        // Ground: filled below y = 0, hot spots marked on it, then its line.
+        if y.0 < 0.0 {
+            plot.draw(&Rectangle::new(
+                [(x.0, y.0), (x.1, 0.0_f64.min(y.1))],
+                GROUND_FILL.filled(),
+            ))?;
+            let depth = (0.35 * -y.0).min(0.05 * (y.1 - y.0));
+            for b in &self.bands {
+                plot.draw(&Rectangle::new(
+                    [(b.from, -depth), (b.to, 0.0)],
+                    b.color.filled(),
+                ))?;
+            }
+        }
+        if y.0 <= 0.0 && 0.0 <= y.1 {
+            plot.draw(&PathElement::new(
+                vec![(x.0, 0.0), (x.1, 0.0)],
+                GROUND_LINE.stroke_width(2),
+            ))?;
+        }
+
+        let base = plot.get_base_pixel();
+        let px = |p: (f64, f64)| {
+            let (a, b) = plot.map_coordinate(&p);
+            (a - base.0, b - base.1)
+        };
+        let pixels = plot.strip_coord_spec();
+        if self.pairs.is_empty() {
+            draw_placeholder(&pixels, "no point pairs in this problem")?;
+            return Ok(note);
+        }
+
+        for p in &self.pairs {
+            draw_dashed(
+                &pixels,
+                &[px(p.sight[0]), px(p.sight[1])],
+                SIGHT.stroke_width(1),
+                7.0,
+                5.0,
+            )?;
+        }
+        for p in &self.pairs {
+            plot.draw(&PathElement::new(p.ray.clone(), p.color.stroke_width(2)))?;
+        }
+        let inside = |q: (f64, f64)| x.0 <= q.0 && q.0 <= x.1 && y.0 <= q.1 && q.1 <= y.1;
+        for p in &self.pairs {
+            draw_marker(&pixels, px(p.origin), Marker::Circle, p.color)?;
+            if inside(p.through) {
+                draw_marker(&pixels, px(p.through), Marker::Triangle, p.color)?;
+            }
+            draw_marker(&pixels, px(p.target), Marker::Star, p.color)?;
+            draw_marker(&pixels, px(p.endpoint), Marker::Cross, INK)?;
+        }
+        Ok(note)
+    }
+
+    fn draw_profile<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (d, y) = (self.delta, self.y);
+        let mut chart = ChartBuilder::on(area)
+            .margin_top(CHART_TOP)
+            .margin_left(4)
+            .margin_right(24)
+            .caption("refractivity profile", text(PANEL_TITLE_SIZE, INK))
+            .x_label_area_size(X_LABEL_AREA)
+            .y_label_area_size(PROFILE_Y_LABEL_AREA)
+            .build_cartesian_2d(d.0..d.1, y.0..y.1)?;
+        chart
+            .configure_mesh()
+            .x_desc("δ × 10⁶")
+            .y_desc("height (m)")
+            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
+            .label_style(text(TICK_SIZE, INK))
+            .bold_line_style(GRID)
+            .light_line_style(TRANSPARENT)
+            .axis_style(MUTED)
+            .x_labels(6)
+            .x_label_formatter(&|v| format_sig(*v, 4))
+            .y_label_formatter(&|v| format_sig(*v, 4))
+            .draw()?;
+        let plot = chart.plotting_area().clone();
+
+        if y.0 < 0.0 {
+            plot.draw(&Rectangle::new(
+                [(d.0, y.0), (d.1, 0.0_f64.min(y.1))],
+                GROUND_FILL.filled(),
+            ))?;
+        }
+        if y.0 <= 0.0 && 0.0 <= y.1 {
+            plot.draw(&PathElement::new(
+                vec![(d.0, 0.0), (d.1, 0.0)],
+                GROUND_LINE.stroke_width(2),
+            ))?;
+        }
+        if d.0 < 0.0 && 0.0 < d.1 {
+            plot.draw(&PathElement::new(
+                vec![(0.0, y.0), (0.0, y.1)],
+                MUTED.stroke_width(1),
+            ))?;
+        }
+
+        let base = plot.get_base_pixel();
+        let pixels = plot.strip_coord_spec();
+        // Hot spot curves on top of the origin curve would hide it where they
+        // coincide (high above the ground), so the dashed ones go first.
+        for p in self.profiles.iter().rev() {
+            if p.dashed {
+                let pts: Vec<(i32, i32)> = p
+                    .points
+                    .iter()
+                    .map(|q| {
+                        let (a, b) = plot.map_coordinate(q);
+                        (a - base.0, b - base.1)
+                    })
+                    .collect();
+                draw_dashed(&pixels, &pts, p.color.stroke_width(2), 9.0, 6.0)?;
+            } else {
+                plot.draw(&PathElement::new(p.points.clone(), p.color.stroke_width(2)))?;
+            }
+        }
+        Ok(())
+    }
+}
