@@ -1,0 +1,110 @@
+//! The bundled problems: every file loads, traces, and fits; and a fit's result
+//! does not depend on the number of threads.
+
+use mirage::io::Problem;
+use mirage::io::report::trace_pairs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn problem_files() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "at least five bundled problems");
+    files
+}
+
+#[test]
+fn every_bundled_problem_loads_traces_and_is_documented() {
+    for f in problem_files() {
+        let p = Problem::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            p.description.len() > 80,
+            "{}: describe what a user would see",
+            f.display()
+        );
+        assert!(!p.free.is_empty() && !p.pairs.is_empty());
+        let r = trace_pairs(&p, &p.medium);
+        assert_eq!(r.pairs.len(), p.pairs.len());
+        for pr in &r.pairs {
+            assert!(pr.endpoint.iter().all(|c| c.is_finite()), "{}", f.display());
+            assert!(
+                !pr.unreachable,
+                "{}: every ray reaches its target plane",
+                f.display()
+            );
+        }
+        assert!(r.totals.objective.is_finite() && r.totals.objective > 0.0);
+    }
+}
+
+#[test]
+fn every_bundled_problem_fits() {
+    for f in problem_files() {
+        let p = Problem::load(&f).unwrap();
+        let r = mirage::fit::fit(&p, None).unwrap();
+        assert!(
+            r.totals.objective < 1e-12,
+            "{}: F = {:e} after {:?}",
+            f.display(),
+            r.totals.objective,
+            r.runs
+                .iter()
+                .map(|r| (&r.label, r.objective))
+                .collect::<Vec<_>>()
+        );
+        assert!(r.solver.reached_target);
+        // The fitted medium is a valid medium and reproduces the fit when traced.
+        r.medium.validate().unwrap();
+        assert!((trace_pairs(&p, &r.medium).totals.objective - r.totals.objective).abs() < 1e-20);
+    }
+}
+
+/// Removes the fields that measure time.
+fn without_timing(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.remove("wall_time_s");
+            m.remove("elapsed_s");
+            m.values_mut().for_each(without_timing);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(without_timing),
+        _ => {}
+    }
+}
+
+#[test]
+fn fit_results_are_identical_with_one_and_two_threads() {
+    // fata-morgana exercises the parallel restarts as well as parallel pairs.
+    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/fata-morgana.json");
+    let dir = tempfile::tempdir().unwrap();
+    let mut results = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("r{threads}.json"));
+        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+            .args(["--threads", threads, "fit", "-q"])
+            .arg(&problem)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mut v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        without_timing(&mut v);
+        results.push(v);
+    }
+    assert!(
+        results[0]["runs"].as_array().unwrap().len() > 1,
+        "restarts ran"
+    );
+    assert_eq!(results[0], results[1]);
+}
