@@ -204,10 +204,7 @@ impl Objective {
                 for (row, c) in d.iter_mut().zip(&comps) {
                     // A residual that does not depend on the chunk's parameters
                     // carries no derivative part: unwrap_generic gives zeros then.
-                    let eps = c
-                        .eps
-                        .clone()
-                        .unwrap_generic(nalgebra::Const::<N>, nalgebra::U1);
+                    let eps = c.eps.unwrap_generic(nalgebra::Const::<N>, nalgebra::U1);
                     row.copy_from_slice(eps.as_slice());
                 }
                 (comps.map(|c| c.re()), d, t.stats.rhs_evaluations)

@@ -93,7 +93,7 @@ impl BoxMap {
             .collect()
     }
 
-    fn from_box(&self, x: &[f64]) -> Vec<f64> {
+    fn unbox(&self, x: &[f64]) -> Vec<f64> {
         x.iter()
             .zip(&self.bounds)
             .map(|(&x, &(l, u))| match (l.is_finite(), u.is_finite()) {
@@ -256,7 +256,7 @@ pub fn run_nelder_mead(
     let map = BoxMap {
         bounds: bounds.to_vec(),
     };
-    let z0 = map.from_box(x0);
+    let z0 = map.unbox(x0);
     // Initial simplex: 10% of each coordinate (in the box's coordinates), so the
     // simplex has the problem's own scales.
     let mut simplex = vec![DVector::from_vec(z0.clone())];
@@ -459,7 +459,7 @@ mod tests {
             ],
         };
         let x = [2.5, 3.0, -7.0, 11.0];
-        let back = m.to_box(&m.from_box(&x));
+        let back = m.to_box(&m.unbox(&x));
         for (a, b) in x.iter().zip(&back) {
             assert!((a - b).abs() < 1e-12, "{x:?} -> {back:?}");
         }

@@ -145,7 +145,7 @@ impl<T: Copy> LogisticMedium<T> {
 
     /// The value of a parameter, or `None` if this medium has no such parameter.
     pub fn get(&self, p: Param) -> Option<T> {
-        self.slot(p).map(|v| *v)
+        self.slot(p).copied()
     }
 
     /// Sets a parameter; errors if this medium has no such parameter.
