@@ -171,8 +171,8 @@ pub fn fit_summary(problem: &Problem, r: &crate::io::report::FitReport) -> Strin
     );
     let _ = writeln!(
         s,
-        "solver {:?} ({} run(s), best: {}): {} iterations, {} residual + {} Jacobian evaluations, {:.3} s",
-        sv.method,
+        "solver {} ({} run(s), best: {}): {} iterations, {} residual + {} Jacobian evaluations, {:.3} s",
+        sv.method.name(),
         r.runs.len(),
         sv.best_run,
         sv.iterations,

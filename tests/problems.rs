@@ -108,3 +108,77 @@ fn fit_results_are_identical_with_one_and_two_threads() {
     );
     assert_eq!(results[0], results[1]);
 }
+
+#[test]
+fn the_fit_result_holds_what_the_format_promises_and_its_medium_feeds_back() {
+    let problem_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("result.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .args(["fit", "-q"])
+        .arg(&problem_path)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("hotspots[0].radius") && stdout.contains("std. error"),
+        "{stdout}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    for key in [
+        "medium",
+        "parameters",
+        "undetermined",
+        "objective",
+        "summed_distance",
+        "max_distance",
+        "pairs",
+        "solver",
+        "runs",
+        "history",
+    ] {
+        assert!(v.get(key).is_some(), "result lacks `{key}`");
+    }
+    for key in [
+        "method",
+        "iterations",
+        "residual_evaluations",
+        "jacobian_evaluations",
+        "wall_time_s",
+        "stop_reason",
+    ] {
+        assert!(v["solver"].get(key).is_some(), "solver lacks `{key}`");
+    }
+    for p in v["parameters"].as_array().unwrap() {
+        assert!(
+            p["value"].is_f64() && p["standard_error"].is_f64() && p["determined"] == true,
+            "{p}"
+        );
+    }
+    for p in v["pairs"].as_array().unwrap() {
+        assert!(p["endpoint"].is_array() && p["distance"].is_f64());
+        assert!(p["occluded"].is_boolean() && p["unreachable"].is_boolean());
+    }
+    let history = &v["history"]["runs"][0]["records"];
+    assert!(
+        history.as_array().unwrap().len() > 2,
+        "objective per iteration"
+    );
+    // No NaN can hide in JSON (serde_json writes null for it): no nulls but the
+    // documented standard errors of undetermined parameters.
+    assert!(!std::fs::read_to_string(&out).unwrap().contains("NaN"));
+
+    // Feed the fitted medium back as the problem's medium: the pairs are met.
+    let mut problem: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&problem_path).unwrap()).unwrap();
+    problem["medium"] = v["medium"].clone();
+    let p = Problem::parse(&problem.to_string(), Path::new("refit.json")).unwrap();
+    assert!(trace_pairs(&p, &p.medium).totals.objective < 1e-12);
+}

@@ -225,3 +225,95 @@ fn adaptive_error_follows_its_tolerance() {
         "log-log slope of error vs tolerance {k}"
     );
 }
+
+#[test]
+fn ground_stop_mode_ends_on_the_ground_where_the_line_meets_it() {
+    use mirage::trace::GroundMode;
+    let origin = V3::new(1.0, 1.6, 0.0);
+    let dir = V3::new(0.05, -0.01, 1.0).normalized();
+    // Straight line: y = 1.6 + t·d.y = 0.
+    let t = -1.6 / dir.y;
+    let exact = origin + dir * t;
+    for method in methods() {
+        let mut opts = TraceOptions::new(method);
+        opts.ground = GroundMode::Stop;
+        opts.max_length = Some(1000.0);
+        let r = trace::<f64, _>(&Vacuum, origin, dir, None, &opts, None);
+        assert_eq!(r.end, End::Ground, "{method:?}");
+        assert!(r.occluded && !r.unreachable);
+        assert!(
+            (r.endpoint - exact).norm() < 1e-9,
+            "{method:?}: {:?} vs {exact:?}",
+            r.endpoint
+        );
+        assert!((r.arc_length - t).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn a_dip_below_the_ground_between_two_steps_is_flagged_occluded() {
+    // A parabola (n² linear in y, rising n upward bends rays up) that goes below
+    // y = 0 and comes back up inside one long RK4 step: both step ends are above
+    // ground, the lowest point is not.
+    let medium = LinearSquare { n0: 1.0, g: 4e-5 };
+    let origin = V3::new(0.0, 0.5, 0.0);
+    let dir = V3::new(0.0, -0.006, 1.0).normalized();
+    // y(τ) = 0.5 + v_y τ + g τ²/4 is below zero for τ between about 100 and 500
+    // (lowest at τ = −2 v_y / g ≈ 300); a 600 m step jumps over all of it.
+    let lowest = 0.5 - dir.y * dir.y / 4e-5;
+    assert!(
+        lowest < 0.0 && lowest > -0.5,
+        "test geometry: lowest point {lowest}"
+    );
+    let target = plane_at_z(1000.0);
+    let big_step = TraceOptions::new(Method::Rk4 { step: 600.0 });
+    let mut path = Vec::new();
+    let r = trace::<f64, _>(
+        &medium,
+        origin,
+        dir,
+        Some(&target),
+        &big_step,
+        Some(&mut path),
+    );
+    assert!(
+        path.iter().all(|p| p.x.y >= 0.0),
+        "no step end below ground: {path:?}"
+    );
+    assert!(r.occluded, "the dip between steps must be found");
+    assert_eq!(r.end, End::Plane);
+    // The same ray launched a little higher clears the ground: not occluded.
+    let clear = trace::<f64, _>(
+        &medium,
+        V3::new(0.0, 1.5, 0.0),
+        dir,
+        Some(&target),
+        &big_step,
+        None,
+    );
+    assert!(!clear.occluded);
+}
+
+#[test]
+fn a_ray_that_never_reaches_its_plane_is_unreachable_and_ends_nearest_to_it() {
+    // Aimed away from the plane: nearest traced point is the origin itself.
+    let origin = V3::new(0.0, 2.0, 0.0);
+    let dir = V3::new(0.0, 0.0, -1.0);
+    let target = plane_at_z(100.0);
+    for method in methods() {
+        let r = trace::<f64, _>(
+            &Vacuum,
+            origin,
+            dir,
+            Some(&target),
+            &TraceOptions::new(method),
+            None,
+        );
+        assert!(r.unreachable, "{method:?}");
+        assert_eq!(r.end, End::MaxLength);
+        assert!((r.endpoint - origin).norm() < 1e-12);
+        // The arc length reported is the endpoint's (here, the origin's).
+        assert_eq!(r.arc_length, 0.0);
+        assert!(r.stats.accepted_steps > 0);
+    }
+}

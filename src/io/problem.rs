@@ -128,6 +128,17 @@ pub enum SolverMethod {
     Auto,
 }
 
+impl SolverMethod {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverMethod::Lm => "lm",
+            SolverMethod::NelderMead => "nelder-mead",
+            SolverMethod::Auto => "auto",
+        }
+    }
+}
+
 /// Validated solver settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverSettings {
