@@ -14,7 +14,7 @@ mod stepper;
 
 pub use hermite::Segment;
 pub use state::{RayRate, RayState};
-pub use stepper::Method;
+pub use stepper::{Method, rk4_step};
 
 use crate::math::{Real, V3};
 use crate::medium::IndexField;

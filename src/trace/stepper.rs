@@ -34,6 +34,35 @@ impl Method {
     }
 }
 
+/// One classic RK4 step of size `h` (τ) from `y`, whose rate is `f0`; returns the
+/// new state and its rate (the next step's first stage, and the end rate a
+/// [`Segment`](super::Segment) needs). Five right-hand-side evaluations are
+/// counted in `evals` (four new ones per step when chained, since the last is the
+/// next step's first).
+#[inline]
+pub fn rk4_step<T: Real, F: IndexField<T> + ?Sized>(
+    field: &F,
+    y: &RayState<T>,
+    f0: &RayRate<T>,
+    h: f64,
+    evals: &mut u64,
+) -> (RayState<T>, RayRate<T>) {
+    let k2 = rate(field, &y.advanced(h, &[(0.5, f0)]), evals);
+    let k3 = rate(field, &y.advanced(h, &[(0.5, &k2)]), evals);
+    let k4 = rate(field, &y.advanced(h, &[(1.0, &k3)]), evals);
+    let y1 = y.advanced(
+        h,
+        &[
+            (1.0 / 6.0, f0),
+            (1.0 / 3.0, &k2),
+            (1.0 / 3.0, &k3),
+            (1.0 / 6.0, &k4),
+        ],
+    );
+    let f1 = rate(field, &y1, evals);
+    (y1, f1)
+}
+
 /// The outcome of one attempted step.
 pub(crate) enum Attempt<T> {
     /// The step was taken: new state, its rate, and the step used.
@@ -119,23 +148,8 @@ impl Stepper {
     ) -> Attempt<T> {
         match self {
             Stepper::Rk4 { h } => {
-                let h = *h;
-                let k1 = f0;
-                let k2 = rate(field, &y.advanced(h, &[(0.5, k1)]), evals);
-                let k3 = rate(field, &y.advanced(h, &[(0.5, &k2)]), evals);
-                let k4 = rate(field, &y.advanced(h, &[(1.0, &k3)]), evals);
-                let y1 = y.advanced(
-                    h,
-                    &[
-                        (1.0 / 6.0, k1),
-                        (1.0 / 3.0, &k2),
-                        (1.0 / 3.0, &k3),
-                        (1.0 / 6.0, &k4),
-                    ],
-                );
-                // The next step's first stage; also the end rate for interpolation.
-                let f1 = rate(field, &y1, evals);
-                Attempt::Accepted(y1, f1, h)
+                let (y1, f1) = rk4_step(field, y, f0, *h, evals);
+                Attempt::Accepted(y1, f1, *h)
             }
             Stepper::Dopri5 {
                 tolerance,
