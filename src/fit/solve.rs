@@ -185,8 +185,9 @@ impl<J: 'static> Observe<IterState<DVector<f64>, (), J, (), (), f64>> for Record
         state: &IterState<DVector<f64>, (), J, (), (), f64>,
         _kv: &KV,
     ) -> Result<(), ArgminError> {
+        // argmin observes an iteration before it increments the counter.
         self.record(
-            state.get_iter(),
+            state.get_iter() + 1,
             state.get_best_cost(),
             state.get_best_param(),
         );
