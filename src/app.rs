@@ -245,3 +245,37 @@ pub fn rays(problem_path: &Path, output: &Path) -> Result<()> {
     check_not_input(output, &[problem_path])?;
     crate::plot::draw_rays(&problem, &problem.medium, output)
 }
+
+/// `mirage tradeoff`: measures endpoint error, trace cost and fit quality for a
+/// range of RK4 steps and Dormand–Prince tolerances; prints a table and writes
+/// JSON, CSV and a Pareto plot where asked.
+pub fn tradeoff(
+    problem_path: &Path,
+    output: Option<&Path>,
+    csv: Option<&Path>,
+    plot: Option<&Path>,
+    fit: bool,
+) -> Result<crate::tradeoff::Tradeoff> {
+    let problem = Problem::load(problem_path)?;
+    for out in [output, csv, plot].into_iter().flatten() {
+        check_not_input(out, &[problem_path])?;
+    }
+    if let Some(p) = plot {
+        crate::plot::ImageFormat::from_path(p)?;
+    }
+    if fit {
+        crate::tradeoff::check_fit(&problem)?;
+    }
+    let t = crate::tradeoff::measure(&problem, fit)?;
+    if let Some(out) = output {
+        write_json(out, &t)?;
+    }
+    if let Some(c) = csv {
+        crate::io::write_atomic(c, t.to_csv().as_bytes())?;
+    }
+    if let Some(p) = plot {
+        crate::plot::draw_tradeoff(&t, p)?;
+    }
+    print!("{}", t.to_table());
+    Ok(t)
+}

@@ -16,3 +16,4 @@ pub mod pair;
 pub mod plot;
 pub mod scene;
 pub mod trace;
+pub mod tradeoff;

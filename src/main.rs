@@ -48,6 +48,23 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Measure the speed/accuracy trade of the integrators on a problem.
+    Tradeoff {
+        /// Problem file (JSON).
+        problem: PathBuf,
+        /// Write the measurements as JSON here.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Write the measurements as CSV here.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Pareto plot, error against time (.png or .svg).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Measure traces only, no fits.
+        #[arg(long)]
+        no_fit: bool,
+    },
     /// Draw the ray diagram of a problem's pairs through its medium.
     Rays {
         /// Problem file (JSON).
@@ -99,6 +116,20 @@ fn main() -> ExitCode {
             mirage::app::fit(problem, &options).map(|_| ())
         }
         Command::Rays { problem, output } => mirage::app::rays(problem, output),
+        Command::Tradeoff {
+            problem,
+            output,
+            csv,
+            plot,
+            no_fit,
+        } => mirage::app::tradeoff(
+            problem,
+            output.as_deref(),
+            csv.as_deref(),
+            plot.as_deref(),
+            !no_fit,
+        )
+        .map(|_| ()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

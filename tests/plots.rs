@@ -31,6 +31,14 @@ fn problem() -> Problem {
     Problem::parse(PROBLEM, Path::new("t.json")).expect("the test problem is valid")
 }
 
+/// Keeps a rendered file for inspection when `MIRAGE_PLOT_DIR` names a folder.
+fn keep(path: &Path) {
+    if let Some(dir) = std::env::var_os("MIRAGE_PLOT_DIR") {
+        let name = path.file_name().unwrap();
+        std::fs::copy(path, Path::new(&dir).join(name)).unwrap();
+    }
+}
+
 fn decode(path: &Path) -> image::RgbImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("{} does not decode: {e}", path.display()))
@@ -47,6 +55,7 @@ fn ray_diagram_renders_to_png() {
     let out = dir.path().join("rays.png");
     let p = problem();
     draw_rays(&p, &p.medium, &out).unwrap();
+    keep(&out);
 
     let img = decode(&out);
     assert_eq!(img.dimensions(), (1400, 700));
@@ -177,6 +186,7 @@ fn convergence_plot_renders_to_png_and_svg() {
 
     let png = dir.path().join("convergence.png");
     draw_convergence(&h, &png).unwrap();
+    keep(&png);
     let img = decode(&png);
     assert_eq!(img.dimensions(), (1400, 900));
     assert!(distinct_colours(&img) >= 8, "the plot looks blank");
@@ -278,4 +288,51 @@ fn convergence_plot_survives_odd_histories() {
             }
         }
     }
+}
+
+#[test]
+fn crowded_plots_keep_their_legends_in_bounds() {
+    let dir = tempfile::tempdir().unwrap();
+    // Forty pairs fanning out over a hot spot.
+    let pairs: Vec<String> = (0..40)
+        .map(|i| {
+            let x = i as f64 - 20.0;
+            format!(
+                r#"{{ "origin": [0, 1.6, 0], "through": [{x}, -0.5, 600], "target": [{x}, 5, 600] }}"#
+            )
+        })
+        .collect();
+    let text = PROBLEM.replace(
+        &PROBLEM[PROBLEM.find("\"pairs\"").unwrap()..PROBLEM.find("\"trace\"").unwrap()],
+        &format!("\"pairs\": [{}],\n  ", pairs.join(",\n")),
+    );
+    let p = Problem::parse(&text, Path::new("crowded.json")).unwrap();
+    let out = dir.path().join("crowded.svg");
+    draw_rays(&p, &p.medium, &out).unwrap();
+    let svg = std::fs::read_to_string(&out).unwrap();
+    assert!(svg.contains("pair 14:"));
+    assert!(!svg.contains("pair 15:"), "the legend lists every pair");
+    assert!(svg.contains("… and 25 more pairs"));
+
+    // Fifteen runs over twenty parameters.
+    let h = History {
+        param_names: (0..20).map(|k| format!("p{k}")).collect(),
+        runs: (0..15)
+            .map(|r| RunHistory {
+                label: format!("lm (start {r})"),
+                records: (0..5)
+                    .map(|i| IterationRecord {
+                        iteration: i,
+                        elapsed_s: 0.1 * i as f64,
+                        objective: 10f64.powi(-(i as i32) - r),
+                        params: (0..20).map(|k| (k * r) as f64 / (1.0 + i as f64)).collect(),
+                    })
+                    .collect(),
+            })
+            .collect(),
+    };
+    let out = dir.path().join("crowded-convergence.png");
+    draw_convergence(&h, &out).unwrap();
+    keep(&out);
+    assert_eq!(decode(&out).dimensions(), (1400, 900));
 }

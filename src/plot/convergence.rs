@@ -2,9 +2,10 @@
 //! and how each free parameter approached its final value.
 
 use super::{
-    AXIS_LABEL_SIZE, DrawResult, Figure, GRID, INK, LegendEntry, MUTED, PANEL_TITLE_SIZE, Span,
-    Swatch, TICK_SIZE, decade_range, draw_dashed, draw_header, draw_legend, draw_legend_column,
-    draw_placeholder, format_sig, legend_height, log_label, save, series_color, text,
+    Axes, DrawResult, Figure, LegendEntry, MUTED, Span, Swatch, TICK_SIZE, TextMode, build_chart,
+    decade_range, decade_ticks, draw_axes, draw_dashed, draw_header, draw_label, draw_legend,
+    draw_legend_column, draw_placeholder, format_sig, legend_height, log_label, minus,
+    pixel_mapper, save, series_color, text, truncate_legend,
 };
 use crate::error::Result;
 use crate::fit::History;
@@ -21,7 +22,6 @@ const FLOOR_MIN: f64 = 1e-32;
 const TOP_SHARE: f64 = 0.5;
 /// Width of the parameter legend beside the parameter panel.
 const PARAM_LEGEND_W: u32 = 330;
-const Y_LABEL_AREA: u32 = 72;
 
 /// Draws the convergence plots of a fit: objective F (log scale) against
 /// iteration and against wall time, one curve per run, and each free parameter's
@@ -38,9 +38,9 @@ pub fn draw_convergence(history: &History, output: &Path) -> Result<()> {
 struct RunView {
     label: String,
     color: RGBColor,
-    /// (iteration, F clamped to the floor).
+    /// (iteration, log10 F with F clamped to the floor).
     by_iteration: Vec<(f64, f64)>,
-    /// (seconds, F clamped to the floor).
+    /// (seconds, log10 F with F clamped to the floor).
     by_time: Vec<(f64, f64)>,
     /// Per parameter: (iteration, normalised deviation from this run's final).
     params: Vec<Vec<(f64, f64)>>,
@@ -54,6 +54,7 @@ struct ConvergenceFigure {
     /// Final values of the best run, for the legend.
     finals: Vec<Option<f64>>,
     best: Option<usize>,
+    /// log10 of the value zeros are drawn at.
     floor: f64,
     has_zero: bool,
     iterations: (f64, f64),
@@ -74,10 +75,11 @@ impl ConvergenceFigure {
         } else {
             FLOOR_MIN
         };
-        let has_zero = records().any(|r| r.objective.is_finite() && r.objective <= floor);
+        let has_zero = records().any(|r| r.objective.is_finite() && r.objective < floor);
+        // Objectives are drawn as log10(F) on a linear axis (see `decade_range`).
         let clamp = |f: f64| {
             if f.is_finite() {
-                Some(f.max(floor))
+                Some(f.max(floor).log10())
             } else {
                 None
             }
@@ -144,9 +146,8 @@ impl ConvergenceFigure {
         let (mut its, mut secs, mut objs, mut devs) =
             (Span::EMPTY, Span::EMPTY, Span::EMPTY, Span::EMPTY);
         for r in &runs {
-            for &(i, f) in &r.by_iteration {
+            for &(i, _) in &r.by_iteration {
                 its.include(i);
-                objs.include(f);
             }
             for &(t, _) in &r.by_time {
                 secs.include(t);
@@ -157,6 +158,11 @@ impl ConvergenceFigure {
                 }
             }
         }
+        for r in records() {
+            if r.objective.is_finite() {
+                objs.include(r.objective.max(floor));
+            }
+        }
         its.include(0.0);
         secs.include(0.0);
         devs.include(0.0);
@@ -165,7 +171,7 @@ impl ConvergenceFigure {
             names,
             finals,
             best,
-            floor,
+            floor: floor.log10(),
             has_zero,
             iterations: its.padded(0.02, (0.0, 1.0)),
             seconds: secs.padded(0.02, (0.0, 1.0)),
@@ -208,21 +214,30 @@ fn normalised_trajectory(run: &crate::fit::history::RunHistory, k: usize) -> Vec
         .collect()
 }
 
+/// Most runs named in the legend (three rows).
+const MAX_RUN_ENTRIES: usize = 12;
+
+/// Width of the tick label column left of each panel.
+const Y_LABEL_AREA: u32 = 84;
+
 impl Figure for ConvergenceFigure {
     fn size(&self) -> (u32, u32) {
         SIZE
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let (header, body) = root.split_vertically(70);
-        let subtitle = self.subtitle();
-        draw_header(&header, "Fit convergence", &subtitle)?;
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        mode: TextMode,
+    ) -> DrawResult<DB> {
+        let (header, body) = root.split_vertically(74);
+        draw_header(&header, "Fit convergence", &self.subtitle(), mode)?;
         if self.is_empty() {
-            return draw_placeholder(&body, "no iterations recorded");
+            return draw_placeholder(&body, "no iterations recorded", mode);
         }
 
         let (w, h) = body.dim_in_pixel();
-        let top_h = (h as f64 * TOP_SHARE).round() as u32;
+        let top_h = (f64::from(h) * TOP_SHARE).round() as u32;
         let (top, bottom) = body.split_vertically(top_h);
         let run_legend: Vec<LegendEntry> = self
             .runs
@@ -235,15 +250,17 @@ impl Figure for ConvergenceFigure {
                 LegendEntry::new(Swatch::Line(r.color, 3), label)
             })
             .collect();
-        let legend_h = legend_height(&run_legend, (w - Y_LABEL_AREA - 20) as i32) as u32;
+        let run_legend = truncate_legend(run_legend, MAX_RUN_ENTRIES, "runs");
+        let indent = (Y_LABEL_AREA + 6) as i32;
+        let legend_h = legend_height(&run_legend, w as i32 - indent - 20) as u32;
         let (top_charts, run_legend_area) = top.split_vertically(top_h.saturating_sub(legend_h));
         let (left, right) = top_charts.split_horizontally(w / 2);
-        self.draw_objective(&left, false)?;
-        self.draw_objective(&right, true)?;
-        draw_legend(&run_legend_area, &run_legend, (Y_LABEL_AREA + 10) as i32)?;
+        self.draw_objective(&left, false, mode)?;
+        self.draw_objective(&right, true, mode)?;
+        draw_legend(&run_legend_area, &run_legend, indent, mode)?;
 
         let (param_area, param_legend_area) = bottom.split_horizontally(w - PARAM_LEGEND_W);
-        self.draw_params(&param_area)?;
+        self.draw_params(&param_area, mode)?;
         let param_legend: Vec<LegendEntry> = self
             .names
             .iter()
@@ -251,15 +268,25 @@ impl Figure for ConvergenceFigure {
             .enumerate()
             .map(|(k, (name, fin))| {
                 let label = match fin {
-                    Some(v) => format!("{name} → {}", format_sig(*v, 4)),
+                    Some(v) => format!("{name} → {}", minus(format_sig(*v, 4))),
                     None => name.clone(),
                 };
                 LegendEntry::new(Swatch::Line(series_color(k), 3), label)
             })
             .collect();
-        // A column beside the panel, starting level with its plotting area.
-        draw_legend_column(&param_legend_area, &param_legend, 40)
+        // A column beside the panel, starting level with its plotting area,
+        // as long as the panel is tall.
+        let (_, column_h) = param_legend_area.dim_in_pixel();
+        let rows = (column_h as usize).saturating_sub(100) / 24;
+        let param_legend = truncate_legend(param_legend, rows.max(1), "parameters");
+        draw_legend_column(&param_legend_area, &param_legend, 40, mode)
     }
+}
+
+/// Tick count for an iteration axis: no more than one per whole iteration, so
+/// short runs are not labelled 0.5, 1.5, ….
+fn iteration_ticks((lo, hi): (f64, f64)) -> usize {
+    ((hi - lo).clamp(0.0, 9.0).floor() as usize + 1).max(2)
 }
 
 /// An objective value for labels (F can be exactly 0 at convergence).
@@ -293,6 +320,7 @@ impl ConvergenceFigure {
         &self,
         area: &DrawingArea<DB, Shift>,
         by_time: bool,
+        mode: TextMode,
     ) -> DrawResult<DB> {
         let (x, caption, x_desc) = if by_time {
             (
@@ -303,44 +331,37 @@ impl ConvergenceFigure {
         } else {
             (self.iterations, "objective against iteration", "iteration")
         };
-        let (lo, hi) = self.objective;
-        let mut chart = ChartBuilder::on(area)
-            .margin_top(8)
-            .margin_left(10)
-            .margin_right(28)
-            .caption(caption, text(PANEL_TITLE_SIZE, INK))
-            .x_label_area_size(52)
-            .y_label_area_size(Y_LABEL_AREA)
-            .build_cartesian_2d(x.0..x.1, (lo..hi).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc("objective F (m²)")
-            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
-            .label_style(text(TICK_SIZE, INK))
-            .bold_line_style(GRID)
-            .light_line_style(TRANSPARENT)
-            .axis_style(MUTED)
-            .y_labels(8)
-            .x_label_formatter(&|v| format_sig(*v, 4))
-            .y_label_formatter(&|v| log_label(*v))
-            .draw()?;
+        let y = self.objective;
+        let mut chart = build_chart(area, x, y, Y_LABEL_AREA)?;
+        draw_axes(
+            area,
+            &mut chart,
+            &Axes {
+                caption,
+                x_desc,
+                y_desc: "objective F (m²)",
+                x_ticks: if by_time { 10 } else { iteration_ticks(x) },
+                y_ticks: decade_ticks(y),
+                x_format: &|v| format_sig(v, 4),
+                y_format: &|v| log_label(10f64.powf(v)),
+            },
+            mode,
+        )?;
         let plot = chart.plotting_area();
+        let px = pixel_mapper(&chart);
+        let pixels = plot.strip_coord_spec();
 
         if self.has_zero {
-            let base = plot.get_base_pixel();
-            let px = |p: (f64, f64)| {
-                let (a, b) = plot.map_coordinate(&p);
-                (a - base.0, b - base.1)
-            };
-            let pixels = plot.strip_coord_spec();
             let (a, b) = (px((x.0, self.floor)), px((x.1, self.floor)));
             draw_dashed(&pixels, &[a, b], MUTED.stroke_width(1), 6.0, 4.0)?;
-            pixels.draw(&Text::new(
+            let style = text(TICK_SIZE, MUTED).pos(Pos::new(HPos::Right, VPos::Bottom));
+            draw_label(
+                &pixels,
                 "F = 0 is drawn on this line",
                 (b.0 - 6, b.1 - 4),
-                text(TICK_SIZE, MUTED).pos(Pos::new(HPos::Right, VPos::Bottom)),
-            ))?;
+                &style,
+                mode,
+            )?;
         }
 
         for r in &self.runs {
@@ -356,7 +377,11 @@ impl ConvergenceFigure {
         Ok(())
     }
 
-    fn draw_params<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+    fn draw_params<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        mode: TextMode,
+    ) -> DrawResult<DB> {
         let caption = match (self.best, self.runs.len()) {
             (Some(b), n) if n > 1 => format!(
                 "parameters, normalised (bold: {}; faint: other runs)",
@@ -365,29 +390,24 @@ impl ConvergenceFigure {
             _ => "parameters, normalised".to_string(),
         };
         let (x, y) = (self.iterations, self.deviation);
-        let mut chart = ChartBuilder::on(area)
-            .margin_top(8)
-            .margin_left(10)
-            .margin_right(28)
-            .caption(caption, text(PANEL_TITLE_SIZE, INK))
-            .x_label_area_size(52)
-            .y_label_area_size(Y_LABEL_AREA)
-            .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
-        chart
-            .configure_mesh()
-            .x_desc("iteration")
-            .y_desc("(p − p_final) / max(|p_final|, range)")
-            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
-            .label_style(text(TICK_SIZE, INK))
-            .bold_line_style(GRID)
-            .light_line_style(TRANSPARENT)
-            .axis_style(MUTED)
-            .x_label_formatter(&|v| format_sig(*v, 4))
-            .y_label_formatter(&|v| format_sig(*v, 3))
-            .draw()?;
-        let plot = chart.plotting_area().clone();
+        let mut chart = build_chart(area, x, y, Y_LABEL_AREA)?;
+        draw_axes(
+            area,
+            &mut chart,
+            &Axes {
+                caption: &caption,
+                x_desc: "iteration",
+                y_desc: "(p − p_final) / max(|p_final|, range)",
+                x_ticks: iteration_ticks(x),
+                y_ticks: 8,
+                x_format: &|v| format_sig(v, 4),
+                y_format: &|v| format_sig(v, 3),
+            },
+            mode,
+        )?;
+        let plot = chart.plotting_area();
         if self.names.is_empty() {
-            return draw_placeholder(&plot.strip_coord_spec(), "no free parameters");
+            return draw_placeholder(&plot.strip_coord_spec(), "no free parameters", mode);
         }
         plot.draw(&PathElement::new(
             vec![(x.0, 0.0), (x.1, 0.0)],

@@ -2,9 +2,9 @@
 //! the refractivity profile δ(y) that bends it.
 
 use super::{
-    AXIS_LABEL_SIZE, DrawResult, Figure, GRID, INK, LegendEntry, MUTED, Marker, PANEL_TITLE_SIZE,
-    Span, Swatch, TICK_SIZE, draw_dashed, draw_header, draw_legend, draw_marker, draw_placeholder,
-    format_sig, legend_height, save, series_color, text,
+    Axes, DrawResult, Figure, INK, LegendEntry, MUTED, Marker, Span, Swatch, TextMode, build_chart,
+    draw_axes, draw_dashed, draw_header, draw_legend, draw_marker, draw_placeholder, format_sig,
+    legend_height, pixel_mapper, save, series_color, truncate_legend,
 };
 use crate::error::Result;
 use crate::io::Problem;
@@ -28,10 +28,10 @@ const SIGHT: RGBColor = RGBColor(150, 150, 150);
 /// Colours of the hot spots (their profile curves and ground bands), kept apart
 /// from the pair palette so a hot spot is never mistaken for a ray.
 const HOT_COLORS: [RGBColor; 4] = [
-    RGBColor(217, 95, 2),
-    RGBColor(231, 41, 138),
-    RGBColor(102, 166, 30),
-    RGBColor(166, 118, 29),
+    RGBColor(178, 24, 43),
+    RGBColor(118, 42, 131),
+    RGBColor(1, 102, 94),
+    RGBColor(140, 81, 10),
 ];
 
 fn hot_color(j: usize) -> RGBColor {
@@ -112,6 +112,59 @@ impl ViewFrame {
     }
 }
 
+/// The traced path as a polyline to draw. An adaptive step can span tens of
+/// metres, far more than a pixel, so each step is filled in along the cubic
+/// Hermite curve through its end states (positions and unit tangents against
+/// arc length). A ray that reached its target plane is cut at its endpoint: the
+/// last step ends beyond the plane.
+fn ray_polyline(
+    path: &[RayState],
+    frame: &ViewFrame,
+    target: V3,
+    report: &crate::io::report::PairReport,
+) -> Vec<V3> {
+    let plane = frame.distance(target);
+    let endpoint = V3::from(report.endpoint);
+    let reached = !report.unreachable;
+    let gap = plane.abs().max(1.0) / 400.0;
+    let mut out = Vec::with_capacity(path.len());
+    let Some(first) = path.first() else {
+        return out;
+    };
+    out.push(first.x);
+    for w in path.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        let ds = b.s - a.s;
+        let pieces = if ds.is_finite() && ds > gap {
+            (ds / gap).ceil().min(64.0) as usize
+        } else {
+            1
+        };
+        let (t0, t1) = (a.v.normalized() * ds, b.v.normalized() * ds);
+        for k in 1..=pieces {
+            let u = k as f64 / pieces as f64;
+            let p = if pieces == 1 {
+                b.x
+            } else {
+                let (u2, u3) = (u * u, u * u * u);
+                a.x * (2.0 * u3 - 3.0 * u2 + 1.0)
+                    + t0 * (u3 - 2.0 * u2 + u)
+                    + b.x * (3.0 * u2 - 2.0 * u3)
+                    + t1 * (u3 - u2)
+            };
+            if reached && frame.distance(p) >= plane {
+                out.push(endpoint);
+                return out;
+            }
+            out.push(p);
+        }
+    }
+    if reached {
+        out.push(endpoint);
+    }
+    out
+}
+
 fn describe_method(problem: &Problem) -> String {
     let spec = &problem.trace_spec;
     let mut s = match (spec.method.as_str(), spec.step, spec.tolerance) {
@@ -176,9 +229,9 @@ impl RayFigure {
             pairs.push(PairView {
                 label,
                 color: series_color(i),
-                ray: path
-                    .iter()
-                    .map(|s| frame.project(s.x))
+                ray: ray_polyline(&path, &frame, pair.target(), &report)
+                    .into_iter()
+                    .map(|x| frame.project(x))
                     .filter(|p| p.0.is_finite() && p.1.is_finite())
                     .collect(),
                 origin,
@@ -237,7 +290,7 @@ impl RayFigure {
                     if from < to {
                         bands.push(HotBand {
                             label: format!("hotspots[{j}] under pair 0's view"),
-                            color: tint(hot_color(j), 0.45),
+                            color: tint(hot_color(j), 0.55),
                             from,
                             to,
                         });
@@ -312,11 +365,12 @@ impl RayFigure {
     }
 
     fn side_legend(&self) -> Vec<LegendEntry> {
-        let mut out: Vec<LegendEntry> = self
+        let pairs: Vec<LegendEntry> = self
             .pairs
             .iter()
             .map(|p| LegendEntry::new(Swatch::Line(p.color, 3), p.label.clone()))
             .collect();
+        let mut out = truncate_legend(pairs, MAX_PAIR_ENTRIES, "pairs");
         if !self.pairs.is_empty() {
             out.push(LegendEntry::new(
                 Swatch::Dashed(SIGHT),
@@ -360,55 +414,67 @@ impl RayFigure {
     }
 }
 
-/// Space reserved around both panels' plotting areas; equal on both sides so
-/// their height axes line up pixel for pixel.
-const X_LABEL_AREA: u32 = 52;
-const CHART_TOP: u32 = 8;
-const SIDE_Y_LABEL_AREA: u32 = 72;
-const PROFILE_Y_LABEL_AREA: u32 = 62;
+/// Width of the tick label column left of each panel; the panels share
+/// everything vertical, so their height axes line up pixel for pixel.
+const SIDE_Y_LABEL_AREA: u32 = 84;
+const PROFILE_Y_LABEL_AREA: u32 = 74;
+const HEADER: u32 = 74;
+/// Most pairs named in the legend (four rows of the side view's legend).
+const MAX_PAIR_ENTRIES: usize = 16;
 
 impl Figure for RayFigure {
     fn size(&self) -> (u32, u32) {
         SIZE
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let (header, body) = root.split_vertically(70);
-        let (w, _) = body.dim_in_pixel();
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        mode: TextMode,
+    ) -> DrawResult<DB> {
+        let (header, body) = root.split_vertically(HEADER);
+        let (w, body_h) = body.dim_in_pixel();
         let side_w = (w as f64 * SIDE_SHARE).round() as u32;
         let side_legend = self.side_legend();
         let profile_legend = self.profile_legend();
+        // Legends go in a strip under the panels, where they cannot hide data.
         let legend_h = legend_height(&side_legend, (side_w - SIDE_Y_LABEL_AREA - 20) as i32)
             .max(legend_height(
                 &profile_legend,
                 (w - side_w - PROFILE_Y_LABEL_AREA - 20) as i32,
             ))
             .max(30);
-        let (_, body_h) = body.dim_in_pixel();
         let (charts, legends) = body.split_vertically(body_h.saturating_sub(legend_h as u32));
         let (side_area, profile_area) = charts.split_horizontally(side_w);
         let (side_legend_area, profile_legend_area) = legends.split_horizontally(side_w);
 
-        let exaggeration = self.draw_side(&side_area)?;
-        self.draw_profile(&profile_area)?;
+        let scale_note = self.draw_side(&side_area, mode)?;
+        self.draw_profile(&profile_area, mode)?;
+        let indent = |label_area: u32| (label_area + 6) as i32;
         draw_legend(
             &side_legend_area,
             &side_legend,
-            (SIDE_Y_LABEL_AREA + 10) as i32,
+            indent(SIDE_Y_LABEL_AREA),
+            mode,
         )?;
         draw_legend(
             &profile_legend_area,
             &profile_legend,
-            (PROFILE_Y_LABEL_AREA + 10) as i32,
+            indent(PROFILE_Y_LABEL_AREA),
+            mode,
         )?;
 
         let mut subtitle = self.method.clone();
-        if let Some(note) = exaggeration {
+        if let Some(note) = scale_note {
             subtitle.push_str(&format!("   ·   {note}"));
         }
-        draw_header(&header, &self.title, &subtitle)?;
-        Ok(())
+        draw_header(&header, &self.title, &subtitle, mode)
     }
+}
+
+/// Tick label of a length axis.
+fn metres(v: f64) -> String {
+    format_sig(v, 4)
 }
 
 impl RayFigure {
@@ -417,23 +483,14 @@ impl RayFigure {
     fn draw_side<DB: DrawingBackend>(
         &self,
         area: &DrawingArea<DB, Shift>,
+        mode: TextMode,
     ) -> std::result::Result<Option<String>, DrawingAreaErrorKind<DB::ErrorType>> {
         let (x, y) = (self.x, self.y);
-        let mut chart = ChartBuilder::on(area)
-            .margin_top(CHART_TOP)
-            .margin_left(10)
-            .margin_right(24)
-            .caption(
-                "side view along each pair's line of sight",
-                text(PANEL_TITLE_SIZE, INK),
-            )
-            .x_label_area_size(X_LABEL_AREA)
-            .y_label_area_size(SIDE_Y_LABEL_AREA)
-            .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
+        let mut chart = build_chart(area, x, y, SIDE_Y_LABEL_AREA)?;
 
         // Pixels per metre vertically over pixels per metre horizontally.
         let (pw, ph) = chart.plotting_area().dim_in_pixel();
-        let ratio = (ph as f64 / (y.1 - y.0)) / (pw as f64 / (x.1 - x.0));
+        let ratio = (f64::from(ph) / (y.1 - y.0)) / (f64::from(pw) / (x.1 - x.0));
         let (y_desc, note) = if ratio > 2.0 {
             (
                 "height (m, exaggerated)",
@@ -450,21 +507,22 @@ impl RayFigure {
         } else {
             ("height (m)", None)
         };
+        draw_axes(
+            area,
+            &mut chart,
+            &Axes {
+                caption: "side view along each pair's line of sight",
+                x_desc: "distance along the view (m)",
+                y_desc,
+                x_ticks: 10,
+                y_ticks: 8,
+                x_format: &metres,
+                y_format: &metres,
+            },
+            mode,
+        )?;
 
-        chart
-            .configure_mesh()
-            .x_desc("distance along the view (m)")
-            .y_desc(y_desc)
-            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
-            .label_style(text(TICK_SIZE, INK))
-            .bold_line_style(GRID)
-            .light_line_style(TRANSPARENT)
-            .axis_style(MUTED)
-            .x_label_formatter(&|v| format_sig(*v, 4))
-            .y_label_formatter(&|v| format_sig(*v, 4))
-            .draw()?;
-        let plot = chart.plotting_area().clone();
-
+        let plot = chart.plotting_area();
         // Ground: filled below y = 0, hot spots marked on it, then its line.
         if y.0 < 0.0 {
             plot.draw(&Rectangle::new(
@@ -486,17 +544,12 @@ impl RayFigure {
             ))?;
         }
 
-        let base = plot.get_base_pixel();
-        let px = |p: (f64, f64)| {
-            let (a, b) = plot.map_coordinate(&p);
-            (a - base.0, b - base.1)
-        };
+        let px = pixel_mapper(&chart);
         let pixels = plot.strip_coord_spec();
         if self.pairs.is_empty() {
-            draw_placeholder(&pixels, "no point pairs in this problem")?;
+            draw_placeholder(&pixels, "no point pairs in this problem", mode)?;
             return Ok(note);
         }
-
         for p in &self.pairs {
             draw_dashed(
                 &pixels,
@@ -521,31 +574,29 @@ impl RayFigure {
         Ok(note)
     }
 
-    fn draw_profile<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+    fn draw_profile<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        mode: TextMode,
+    ) -> DrawResult<DB> {
         let (d, y) = (self.delta, self.y);
-        let mut chart = ChartBuilder::on(area)
-            .margin_top(CHART_TOP)
-            .margin_left(4)
-            .margin_right(24)
-            .caption("refractivity profile", text(PANEL_TITLE_SIZE, INK))
-            .x_label_area_size(X_LABEL_AREA)
-            .y_label_area_size(PROFILE_Y_LABEL_AREA)
-            .build_cartesian_2d(d.0..d.1, y.0..y.1)?;
-        chart
-            .configure_mesh()
-            .x_desc("δ × 10⁶")
-            .y_desc("height (m)")
-            .axis_desc_style(text(AXIS_LABEL_SIZE, INK))
-            .label_style(text(TICK_SIZE, INK))
-            .bold_line_style(GRID)
-            .light_line_style(TRANSPARENT)
-            .axis_style(MUTED)
-            .x_labels(6)
-            .x_label_formatter(&|v| format_sig(*v, 4))
-            .y_label_formatter(&|v| format_sig(*v, 4))
-            .draw()?;
-        let plot = chart.plotting_area().clone();
+        let mut chart = build_chart(area, d, y, PROFILE_Y_LABEL_AREA)?;
+        draw_axes(
+            area,
+            &mut chart,
+            &Axes {
+                caption: "refractivity profile",
+                x_desc: "δ × 10⁶",
+                y_desc: "height (m)",
+                x_ticks: 5,
+                y_ticks: 8,
+                x_format: &|v| format_sig(v, 3),
+                y_format: &metres,
+            },
+            mode,
+        )?;
 
+        let plot = chart.plotting_area();
         if y.0 < 0.0 {
             plot.draw(&Rectangle::new(
                 [(d.0, y.0), (d.1, 0.0_f64.min(y.1))],
@@ -565,20 +616,13 @@ impl RayFigure {
             ))?;
         }
 
-        let base = plot.get_base_pixel();
+        let px = pixel_mapper(&chart);
         let pixels = plot.strip_coord_spec();
         // Hot spot curves on top of the origin curve would hide it where they
         // coincide (high above the ground), so the dashed ones go first.
         for p in self.profiles.iter().rev() {
             if p.dashed {
-                let pts: Vec<(i32, i32)> = p
-                    .points
-                    .iter()
-                    .map(|q| {
-                        let (a, b) = plot.map_coordinate(q);
-                        (a - base.0, b - base.1)
-                    })
-                    .collect();
+                let pts: Vec<(i32, i32)> = p.points.iter().map(|&q| px(q)).collect();
                 draw_dashed(&pixels, &pts, p.color.stroke_width(2), 9.0, 6.0)?;
             } else {
                 plot.draw(&PathElement::new(p.points.clone(), p.color.stroke_width(2)))?;
