@@ -424,6 +424,33 @@ impl<T: Real> LogisticField<T> {
     }
 }
 
+/// [`LogisticField<f64>`]'s compiled coefficients as plain numbers, for the
+/// SIMD tracer (`trace::lanes`), which evaluates the same formula lane-wise.
+#[derive(Clone, Debug)]
+pub(crate) struct RawCoefficients {
+    /// Background `[amp, 1/a]`.
+    pub background: Option<[f64; 2]>,
+    /// Inversion `[amp, 1/a, height]`.
+    pub inversion: Option<[f64; 3]>,
+    /// Per hot spot `[amp, 1/a, x, z, radius, edge]`.
+    pub hotspots: Vec<[f64; 6]>,
+}
+
+impl LogisticField<f64> {
+    /// The compiled coefficients as plain numbers (see [`RawCoefficients`]).
+    pub(crate) fn coefficients(&self) -> RawCoefficients {
+        RawCoefficients {
+            background: self.background.map(|l| [l.amp, l.inv_rate]),
+            inversion: self.inversion.map(|(l, h)| [l.amp, l.inv_rate, h]),
+            hotspots: self
+                .hotspots
+                .iter()
+                .map(|h| [h.layer.amp, h.layer.inv_rate, h.x, h.z, h.radius, h.edge])
+                .collect(),
+        }
+    }
+}
+
 impl<T: Real> IndexField<T> for LogisticField<T> {
     #[inline]
     fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {

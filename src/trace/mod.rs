@@ -8,9 +8,12 @@
 //! Everything is generic over [`Real`]: traced with dual numbers, the same code
 //! returns the exact derivative of the discrete endpoint map (see `fit`).
 
+pub mod fastexp;
 pub mod hermite;
+pub mod lanes;
 pub mod state;
 mod stepper;
+pub mod stratified;
 
 pub use hermite::Segment;
 pub use state::{RayRate, RayState};
@@ -127,6 +130,21 @@ pub struct Trace<T = f64> {
     pub unreachable: bool,
     /// Integration statistics.
     pub stats: Stats,
+}
+
+impl Default for Trace<f64> {
+    /// A placeholder to size output buffers (a zero-length trace at the origin).
+    fn default() -> Self {
+        Trace {
+            endpoint: V3::ZERO,
+            direction: V3::ZERO,
+            arc_length: 0.0,
+            end: End::StepLimit,
+            occluded: false,
+            unreachable: false,
+            stats: Stats::default(),
+        }
+    }
 }
 
 /// Traces the ray from `origin` along the unit vector `direction` until it
@@ -291,7 +309,8 @@ fn real_state<T: Real>(y: &RayState<T>) -> RayState {
 }
 
 /// The first θ ∈ [0, 1] where the step goes below y = 0, given y ≥ 0 at its start.
-fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
+/// Shared by every tracer (scalar, lanes, stratified), so they flag the same rays.
+pub(crate) fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
     let height = |th: f64| {
         let (x, dx) = seg.position_and_slope(th);
         (x.y, dx.y)
@@ -325,7 +344,7 @@ fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
 /// The point where the step meets the plane through `point` with `normal`,
 /// found at θ on the real trajectory and refined by one Newton step in `T`, so
 /// that dual parts carry the implicit derivative dθ = −∂g/∂p / ∂g/∂θ.
-fn locate<T: Real>(
+pub(crate) fn locate<T: Real>(
     seg: &Segment<T>,
     real: &Segment<f64>,
     theta: f64,

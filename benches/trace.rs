@@ -1,0 +1,357 @@
+//! Ray-tracing throughput on one core: the scalar generic tracer, the 3-D
+//! lanes kernel and the stratified 2-D kernel (for every instruction set this
+//! CPU runs), through four media: background only, background + inversion,
+//! and the full medium with one and with eight hot spots. Criterion's
+//! throughput is RK4 steps per second (`Throughput::Elements(steps)`); a table
+//! of rays/s and steps/s per path follows at the end. Then the cost of one
+//! exact Jacobian of `problems/desert-lake.json` relative to one residual
+//! evaluation, on one thread.
+//!
+//! Run with `cargo bench --bench trace`; a filter such as
+//! `cargo bench --bench trace -- "hot spot/"` runs a subset (the table is
+//! printed unless `MIRAGE_BENCH_NO_TABLE` is set).
+
+use criterion::{BenchmarkId, Criterion, Throughput};
+use mirage::fit::objective::Objective;
+use mirage::io::Problem;
+use mirage::math::V3;
+use mirage::medium::{Background, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium};
+use mirage::trace::lanes::{BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_3d};
+use mirage::trace::stratified::trace_batch_2d;
+use mirage::trace::{End, Method, TargetPlane, Trace, TraceOptions, trace};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// RK4 step of the benchmarks (the problem files' default).
+const STEP: f64 = 1.0;
+
+/// The four media, as in `tests/fast_paths.rs`.
+fn media() -> Vec<(&'static str, LogisticMedium)> {
+    let base = LogisticMedium {
+        scale: 1.3,
+        background: Some(Background { n: 1.0, a: 40.0 }),
+        ..LogisticMedium::vacuum()
+    };
+    let inv = LogisticMedium {
+        inversion: Some(Inversion {
+            n: 0.3,
+            a: 2.0,
+            height: 25.0,
+        }),
+        ..base.clone()
+    };
+    let spot = |j: usize| HotSpot {
+        x: -300.0 + 80.0 * j as f64,
+        z: 400.0 + 90.0 * j as f64,
+        radius: 150.0,
+        n: -2.0,
+        a: -0.8,
+        edge: 0.05,
+    };
+    let hot1 = LogisticMedium {
+        hotspots: vec![spot(3)],
+        ..inv.clone()
+    };
+    let hot8 = LogisticMedium {
+        hotspots: (0..8).map(spot).collect(),
+        ..inv.clone()
+    };
+    vec![
+        ("background", base),
+        ("inversion", inv),
+        ("hot spot", hot1),
+        ("8 hot spots", hot8),
+    ]
+}
+
+/// 64 mirage-like rays: an observer 2.5 m up looking 1–1.5 km ahead, within a
+/// few tenths of a degree of the horizon (as in desert-lake).
+fn jobs() -> Vec<RayJob> {
+    let origin = V3::new(0.0, 2.5, 0.0);
+    (0..4 * LANES)
+        .map(|k| {
+            let f = k as f64 / (4 * LANES) as f64;
+            let azimuth = (-15.0 + 30.0 * f).to_radians();
+            let elevation = (-0.2 + 0.3 * ((7 * k) % 11) as f64 / 10.0).to_radians();
+            let distance = 1000.0 + 500.0 * ((5 * k) % 13) as f64 / 12.0;
+            let direction = V3::new(
+                azimuth.sin() * elevation.cos(),
+                elevation.sin(),
+                azimuth.cos() * elevation.cos(),
+            );
+            let target = origin + direction * distance;
+            RayJob {
+                origin,
+                direction,
+                target: TargetPlane {
+                    point: target,
+                    normal: V3::new(target.x, 0.0, target.z).normalized(),
+                },
+            }
+        })
+        .collect()
+}
+
+fn options() -> TraceOptions {
+    TraceOptions::new(Method::Rk4 { step: STEP })
+}
+
+fn scalar(field: &LogisticField, jobs: &[RayJob], out: &mut [Trace]) {
+    for (j, o) in jobs.iter().zip(out) {
+        *o = trace::<f64, _>(
+            field,
+            j.origin,
+            j.direction,
+            Some(&j.target),
+            &options(),
+            None,
+        );
+    }
+}
+
+/// A named way to trace a batch.
+type Path_ = (String, Box<dyn Fn(&LogisticField, &[RayJob], &mut [Trace])>);
+
+/// Every path that applies to `field`.
+fn paths(field: &LogisticField) -> Vec<Path_> {
+    let batch = BatchOptions::from_trace_options(&options()).unwrap();
+    let mut out: Vec<Path_> = vec![("scalar".to_string(), Box::new(scalar))];
+    for isa in Isa::available() {
+        out.push((
+            format!("lanes-{}", isa.name()),
+            Box::new(move |f, j, o| trace_batch_3d(isa, f, j, &batch, o)),
+        ));
+    }
+    if field.is_stratified() {
+        for isa in Isa::available() {
+            out.push((
+                format!("stratified-{}", isa.name()),
+                Box::new(move |f, j, o| trace_batch_2d(isa, f, j, &batch, o).unwrap()),
+            ));
+        }
+    }
+    out
+}
+
+fn placeholder() -> Trace {
+    Trace {
+        endpoint: V3::ZERO,
+        direction: V3::ZERO,
+        arc_length: 0.0,
+        end: End::StepLimit,
+        occluded: false,
+        unreachable: true,
+        stats: Default::default(),
+    }
+}
+
+/// Total RK4 steps to trace `jobs` (the same for every path).
+fn total_steps(field: &LogisticField, jobs: &[RayJob]) -> u64 {
+    let mut out = vec![placeholder(); jobs.len()];
+    scalar(field, jobs, &mut out);
+    out.iter().map(|t| t.stats.accepted_steps).sum()
+}
+
+fn bench_trace(c: &mut Criterion) {
+    let jobs = jobs();
+    for (name, medium) in media() {
+        let field = medium.field();
+        let steps = total_steps(&field, &jobs);
+        let mut group = c.benchmark_group(name);
+        group
+            .throughput(Throughput::Elements(steps))
+            .sample_size(20)
+            .warm_up_time(Duration::from_millis(500))
+            .measurement_time(Duration::from_secs(3));
+        let mut out = vec![placeholder(); jobs.len()];
+        for (path, run) in paths(&field) {
+            group.bench_function(BenchmarkId::from_parameter(&path), |b| {
+                b.iter(|| run(black_box(&field), black_box(&jobs), &mut out))
+            });
+        }
+        group.finish();
+    }
+}
+
+/// The cost of one Jacobian against one residual evaluation, on one thread.
+fn bench_objective(c: &mut Criterion) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for (label, objective) in objectives() {
+        let x: Vec<f64> = objective.start().iter().copied().collect();
+        let mut group = c.benchmark_group(format!("objective {label}"));
+        group
+            .sample_size(10)
+            .measurement_time(Duration::from_secs(3));
+        group.bench_function("residuals", |b| {
+            b.iter(|| pool.install(|| objective.residuals(black_box(&x))))
+        });
+        group.bench_function("jacobian", |b| {
+            b.iter(|| pool.install(|| objective.jacobian(black_box(&x))))
+        });
+        group.finish();
+    }
+}
+
+/// desert-lake as written (Dormand–Prince), and with RK4 at 1 m steps.
+fn objectives() -> Vec<(String, Objective)> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/desert-lake.json");
+    let p = Problem::load(&path).unwrap();
+    let rk4 = Objective::new(p.medium.clone(), p.free.clone(), p.pairs.clone(), options());
+    vec![
+        (
+            format!("desert-lake ({})", p.trace.method.name()),
+            Objective::from_problem(&p),
+        ),
+        ("desert-lake (rk4 1 m)".to_string(), rk4),
+    ]
+}
+
+/// Seconds this thread has run on a CPU. The machine is shared, so wall time
+/// counts the time other processes held the core; CPU time does not.
+#[cfg(target_os = "linux")]
+fn cpu_seconds() -> f64 {
+    #[repr(C)]
+    struct Timespec {
+        sec: i64,
+        nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut ts = Timespec { sec: 0, nsec: 0 };
+    // SAFETY: clock_gettime writes one timespec (two 64-bit fields on
+    // x86-64 and aarch64 Linux) into the pointer it is given.
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime");
+    ts.sec as f64 + ts.nsec as f64 * 1e-9
+}
+
+/// Wall time where thread CPU time is not at hand.
+#[cfg(not(target_os = "linux"))]
+fn cpu_seconds() -> f64 {
+    use std::sync::OnceLock;
+    static START: OnceLock<Instant> = OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64()
+}
+
+/// Best of a few runs of `f`, in seconds of CPU time of this thread.
+fn best_time(f: impl FnMut()) -> f64 {
+    best_of(f, cpu_seconds)
+}
+
+/// Best of a few runs of `f`, in seconds of wall time (for work on a rayon
+/// pool's thread, which this thread's CPU time does not see).
+fn best_wall_time(f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    best_of(f, || start.elapsed().as_secs_f64())
+}
+
+fn best_of(mut f: impl FnMut(), clock: impl Fn() -> f64) -> f64 {
+    f();
+    let mut best = f64::INFINITY;
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_millis(400) {
+        let t = clock();
+        f();
+        best = best.min(clock() - t);
+    }
+    best
+}
+
+/// The table: rays/s and M steps/s per core for every medium and path, and the
+/// Jacobian/residual cost ratio.
+fn table() {
+    let jobs = jobs();
+    println!(
+        "\nOne core (best CPU time of this thread), {} rays of 1–1.5 km, RK4 step {STEP} m; CPU: {}",
+        jobs.len(),
+        cpu_features()
+    );
+    println!(
+        "{:<12} {:<20} {:>12} {:>14}",
+        "medium", "path", "rays/s", "M steps/s"
+    );
+    for (name, medium) in media() {
+        let field = medium.field();
+        let steps = total_steps(&field, &jobs) as f64;
+        let mut out = vec![placeholder(); jobs.len()];
+        for (path, run) in paths(&field) {
+            let t = best_time(|| run(&field, &jobs, &mut out));
+            println!(
+                "{name:<12} {path:<20} {:>12.0} {:>14.2}",
+                jobs.len() as f64 / t,
+                steps / t / 1e6
+            );
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for (label, objective) in objectives() {
+        let x: Vec<f64> = objective.start().iter().copied().collect();
+        let r = best_wall_time(|| {
+            pool.install(|| black_box(objective.residuals(&x)));
+        });
+        let j = best_wall_time(|| {
+            pool.install(|| black_box(objective.jacobian(&x)));
+        });
+        println!(
+            "{label}: residuals {:.2} ms, Jacobian ({} parameters) {:.2} ms = {:.1} × residuals",
+            r * 1e3,
+            objective.free().len(),
+            j * 1e3,
+            j / r
+        );
+    }
+    // What wiring the kernel into the fitter would give: the same residuals
+    // (RK4 1 m) from one batch call.
+    let (_, objective) = objectives().pop().unwrap();
+    let x: Vec<f64> = objective.start().iter().copied().collect();
+    let field = objective.medium(&x).field();
+    let pairs = objective.pairs();
+    let batch_jobs: Vec<RayJob> = pairs.iter().map(RayJob::from_pair).collect();
+    let batch = BatchOptions::from_trace_options(objective.options()).unwrap();
+    // Wall time for both: the objective traces on the pool's thread.
+    let lanes = best_wall_time(|| {
+        let traces = trace_batch(&field, &batch_jobs, &batch);
+        let r: Vec<V3> = traces
+            .iter()
+            .zip(pairs)
+            .map(|(t, p)| (t.endpoint - p.target()) * p.weight)
+            .collect();
+        black_box(r);
+    });
+    let scalar = best_wall_time(|| {
+        pool.install(|| black_box(objective.residuals(&x)));
+    });
+    println!(
+        "desert-lake (rk4 1 m) residuals, {} pairs: objective {:.3} ms, one lanes batch {:.3} ms ({:.1}×)",
+        pairs.len(),
+        scalar * 1e3,
+        lanes * 1e3,
+        scalar / lanes
+    );
+}
+
+fn cpu_features() -> String {
+    let isas: Vec<&str> = Isa::available().iter().map(|i| i.name()).collect();
+    format!("{} (kernels use {})", isas.join(", "), Isa::detect().name())
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    bench_trace(&mut c);
+    bench_objective(&mut c);
+    c.final_summary();
+    // Not in `cargo test --benches` (which passes --test) or when listing.
+    let quick = std::env::args().any(|a| a == "--test" || a == "--list");
+    if !quick && std::env::var_os("MIRAGE_BENCH_NO_TABLE").is_none() {
+        table();
+    }
+}

@@ -1,0 +1,450 @@
+//! The batch tracers against the scalar tracer: the 3-D lanes kernel and the
+//! stratified 2-D kernel must give the scalar tracer's endpoints (to 10⁻⁹ m),
+//! flags, ends and statistics, for every instruction set this CPU runs; and the
+//! polynomial exponential they use must be within its documented error.
+//!
+//! Run with `cargo test --release --test fast_paths -- --nocapture` to see the
+//! largest differences.
+
+use mirage::math::V3;
+use mirage::medium::{Background, HotSpot, Inversion, LogisticField, LogisticMedium};
+use mirage::trace::lanes::{
+    BatchOptions, Isa, LANES, RayJob, exp_in_place, trace_batch, trace_batch_3d,
+};
+use mirage::trace::stratified::{NotStratified, trace_batch_2d};
+use mirage::trace::{End, GroundMode, Method, TargetPlane, Trace, TraceOptions, fastexp, trace};
+
+/// Endpoints (and arc lengths) must agree to this, in metres.
+const TOLERANCE: f64 = 1e-9;
+
+/// A small deterministic generator (SplitMix64): the tests need reproducible
+/// rays, not statistical quality.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [a, b).
+    fn uniform(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+fn background() -> Background {
+    Background { n: 1.0, a: 40.0 }
+}
+
+fn inversion() -> Inversion {
+    Inversion {
+        n: 0.3,
+        a: 2.0,
+        height: 25.0,
+    }
+}
+
+fn hot_spot(rng: &mut Rng) -> HotSpot {
+    HotSpot {
+        x: rng.uniform(-300.0, 300.0),
+        z: rng.uniform(100.0, 1500.0),
+        radius: rng.uniform(0.0, 300.0),
+        n: rng.uniform(-3.0, 1.0),
+        a: rng.uniform(-1.5, -0.2),
+        edge: rng.uniform(0.02, 10.0),
+    }
+}
+
+/// The four media of the benchmarks: background only, background and
+/// inversion, and the full medium with one and with eight hot spots. The
+/// scale is large enough to bend rays visibly over a kilometre.
+fn media() -> Vec<(&'static str, LogisticMedium)> {
+    let mut rng = Rng(7);
+    let base = LogisticMedium {
+        scale: 1.3,
+        background: Some(background()),
+        ..LogisticMedium::vacuum()
+    };
+    let inv = LogisticMedium {
+        inversion: Some(inversion()),
+        ..base.clone()
+    };
+    let hot1 = LogisticMedium {
+        hotspots: vec![HotSpot {
+            x: 0.0,
+            z: 600.0,
+            radius: 200.0,
+            n: -2.0,
+            a: -0.8,
+            edge: 0.05,
+        }],
+        ..inv.clone()
+    };
+    let hot8 = LogisticMedium {
+        hotspots: (0..8).map(|_| hot_spot(&mut rng)).collect(),
+        ..inv.clone()
+    };
+    vec![
+        ("background", base),
+        ("inversion", inv),
+        ("hot spot", hot1),
+        ("8 hot spots", hot8),
+    ]
+}
+
+/// Random rays of every kind: grazing rays that hit the ground or are bent
+/// back up, rays aimed above and below the horizon, rays aimed away from their
+/// plane (never reach it), and rays whose plane is nearly edge-on.
+fn random_jobs(rng: &mut Rng, count: usize) -> Vec<RayJob> {
+    random_jobs_within(rng, count, 150.0, 1500.0)
+}
+
+/// [`random_jobs`] with targets between `near` and `far` metres away.
+fn random_jobs_within(rng: &mut Rng, count: usize, near: f64, far: f64) -> Vec<RayJob> {
+    (0..count)
+        .map(|k| {
+            let origin = V3::new(
+                rng.uniform(-50.0, 50.0),
+                rng.uniform(0.2, 20.0),
+                rng.uniform(-50.0, 50.0),
+            );
+            let azimuth = rng.uniform(-0.6, 0.6);
+            let elevation = rng.uniform(-0.02, 0.01);
+            let mut direction = V3::new(
+                azimuth.sin() * elevation.cos(),
+                elevation.sin(),
+                azimuth.cos() * elevation.cos(),
+            );
+            let distance = rng.uniform(near, far);
+            let target = origin + direction * distance + V3::new(0.0, rng.uniform(-3.0, 3.0), 0.0);
+            let d = target - origin;
+            let mut normal = V3::new(d.x, 0.0, d.z).normalized();
+            match k % 11 {
+                // Aimed away from the plane.
+                3 => direction = -direction,
+                // A plane almost parallel to the ray.
+                7 => normal = V3::new(normal.z, 0.0, -normal.x) + normal * 0.05,
+                _ => {}
+            }
+            RayJob {
+                origin,
+                direction,
+                target: TargetPlane {
+                    point: target,
+                    normal: normal.normalized(),
+                },
+            }
+        })
+        .collect()
+}
+
+fn scalar(field: &LogisticField, jobs: &[RayJob], options: &TraceOptions) -> Vec<Trace> {
+    jobs.iter()
+        .map(|j| trace::<f64, _>(field, j.origin, j.direction, Some(&j.target), options, None))
+        .collect()
+}
+
+/// Largest endpoint difference; panics on any difference in the discrete
+/// outcome (end, flags, statistics) or an endpoint beyond [`TOLERANCE`].
+fn compare(what: &str, reference: &[Trace], got: &[Trace]) -> f64 {
+    assert_eq!(reference.len(), got.len());
+    let mut worst = 0.0f64;
+    for (i, (r, g)) in reference.iter().zip(got).enumerate() {
+        let ctx = || format!("{what}, ray {i}: scalar {r:?}\n batch {g:?}");
+        assert_eq!(r.end, g.end, "{}", ctx());
+        assert_eq!(r.occluded, g.occluded, "{}", ctx());
+        assert_eq!(r.unreachable, g.unreachable, "{}", ctx());
+        assert_eq!(r.stats, g.stats, "{}", ctx());
+        let d = (r.endpoint - g.endpoint).norm();
+        assert!(d <= TOLERANCE, "endpoint differs by {d:e} m: {}", ctx());
+        assert!(
+            (r.arc_length - g.arc_length).abs() <= TOLERANCE,
+            "{}",
+            ctx()
+        );
+        assert!((r.direction - g.direction).norm() <= 1e-9, "{}", ctx());
+        worst = worst.max(d);
+    }
+    worst
+}
+
+/// Every batch path this CPU runs for `field`: (label, traces).
+fn batch_paths(
+    field: &LogisticField,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+) -> Vec<(String, Vec<Trace>)> {
+    let mut out = Vec::new();
+    for isa in Isa::available() {
+        let mut t = vec![dummy(); jobs.len()];
+        trace_batch_3d(isa, field, jobs, options, &mut t);
+        out.push((format!("lanes 3-D {}", isa.name()), t.clone()));
+        match trace_batch_2d(isa, field, jobs, options, &mut t) {
+            Ok(()) => out.push((format!("stratified {}", isa.name()), t)),
+            Err(NotStratified) => assert!(!field_is_stratified(field)),
+        }
+    }
+    out.push(("auto".to_string(), trace_batch(field, jobs, options)));
+    out
+}
+
+fn field_is_stratified(field: &LogisticField) -> bool {
+    use mirage::medium::IndexField;
+    field.is_stratified()
+}
+
+fn dummy() -> Trace {
+    Trace {
+        endpoint: V3::ZERO,
+        direction: V3::ZERO,
+        arc_length: 0.0,
+        end: End::StepLimit,
+        occluded: false,
+        unreachable: true,
+        stats: Default::default(),
+    }
+}
+
+/// Traces `jobs` every way and checks every batch path against the scalar
+/// tracer; returns the largest endpoint difference.
+fn check_all(label: &str, field: &LogisticField, jobs: &[RayJob], options: &TraceOptions) -> f64 {
+    let reference = scalar(field, jobs, options);
+    let batch = BatchOptions::from_trace_options(options).unwrap();
+    let mut worst = 0.0f64;
+    for (path, traces) in batch_paths(field, jobs, &batch) {
+        let d = compare(&format!("{label}, {path}"), &reference, &traces);
+        eprintln!("{label:>40} | {path:<20} | max endpoint diff {d:.2e} m");
+        worst = worst.max(d);
+    }
+    worst
+}
+
+#[test]
+fn lanes_and_stratified_endpoints_equal_the_scalar_tracers() {
+    let mut rng = Rng(42);
+    let mut worst = 0.0f64;
+    let mut kinds = [0usize; 4]; // plane, occluded, unreachable, dips between steps
+    for (name, medium) in media() {
+        let field = medium.field();
+        // Batch sizes around the lane count, none of them a multiple of it
+        // except one, and steps from fine to coarse.
+        for (count, step) in [(3 * LANES + 5, 1.0), (LANES, 4.0), (7, 13.7), (1, 2.5)] {
+            let jobs = random_jobs(&mut rng, count);
+            let options = TraceOptions::new(Method::Rk4 { step });
+            let reference = scalar(&field, &jobs, &options);
+            for r in &reference {
+                kinds[0] += usize::from(r.end == End::Plane);
+                kinds[1] += usize::from(r.occluded);
+                kinds[2] += usize::from(r.unreachable);
+            }
+            worst = worst.max(check_all(
+                &format!("{name}, {count} rays, step {step}"),
+                &field,
+                &jobs,
+                &options,
+            ));
+        }
+        // Long rays (a Fata Morgana's 6 to 12 km at 1 m steps): the rounding of
+        // the horizontal position drifts over 10⁴ steps, the same way in all.
+        let jobs = random_jobs_within(&mut rng, LANES + 3, 6000.0, 12000.0);
+        let options = TraceOptions::new(Method::Rk4 { step: 1.0 });
+        worst = worst.max(check_all(
+            &format!("{name}, long rays"),
+            &field,
+            &jobs,
+            &options,
+        ));
+    }
+    // Dips: steps far longer than the dive below the ground (as in
+    // rays_analytic.rs, with a logistic background that is nearly linear
+    // near the ground, so a grazing ray follows a parabola).
+    let dip = LogisticMedium {
+        scale: 3.0,
+        background: Some(Background { n: 1.0, a: 100.0 }),
+        ..LogisticMedium::vacuum()
+    };
+    let dips_hot = LogisticMedium {
+        hotspots: vec![HotSpot {
+            x: 0.0,
+            z: 2000.0,
+            radius: 50.0,
+            n: 0.01,
+            a: 30.0,
+            edge: 1.0,
+        }],
+        ..dip.clone()
+    };
+    for medium in [dip, dips_hot] {
+        let field = medium.field();
+        let options = TraceOptions::new(Method::Rk4 { step: 600.0 });
+        let jobs: Vec<RayJob> = (0..2 * LANES + 3)
+            .map(|k| {
+                let origin = V3::new(0.0, 0.3 + 0.06 * k as f64, 0.0);
+                RayJob {
+                    origin,
+                    direction: V3::new(0.001 * k as f64, -0.006, 1.0).normalized(),
+                    target: TargetPlane {
+                        point: V3::new(0.0, 0.0, 1000.0),
+                        normal: V3::new(0.0, 0.0, 1.0),
+                    },
+                }
+            })
+            .collect();
+        for j in &jobs {
+            let mut path = Vec::new();
+            let r = trace::<f64, _>(
+                &field,
+                j.origin,
+                j.direction,
+                Some(&j.target),
+                &options,
+                Some(&mut path),
+            );
+            if r.occluded && path.iter().all(|p| p.x.y >= 0.0) {
+                kinds[3] += 1;
+            }
+        }
+        worst = worst.max(check_all("dips, step 600", &field, &jobs, &options));
+    }
+    eprintln!(
+        "rays: {} on their plane, {} occluded, {} unreachable, {} dips between steps; max endpoint diff {worst:.2e} m",
+        kinds[0], kinds[1], kinds[2], kinds[3]
+    );
+    assert!(
+        kinds.iter().all(|&k| k > 0),
+        "every kind of ray is exercised: {kinds:?}"
+    );
+}
+
+#[test]
+fn ground_stop_mode_step_limit_and_explicit_max_length_match_the_scalar_tracer() {
+    let mut rng = Rng(3);
+    for (name, medium) in media() {
+        let field = medium.field();
+        let jobs = random_jobs(&mut rng, LANES + 9);
+        let mut options = TraceOptions::new(Method::Rk4 { step: 3.0 });
+        options.ground = GroundMode::Stop;
+        check_all(&format!("{name}, ground stop"), &field, &jobs, &options);
+        let mut options = TraceOptions::new(Method::Rk4 { step: 3.0 });
+        options.max_steps = 150;
+        check_all(&format!("{name}, 150 steps"), &field, &jobs, &options);
+        options.max_steps = 0;
+        check_all(&format!("{name}, 0 steps"), &field, &jobs, &options);
+        let mut options = TraceOptions::new(Method::Rk4 { step: 3.0 });
+        options.max_length = Some(700.0);
+        check_all(&format!("{name}, max length 700"), &field, &jobs, &options);
+    }
+}
+
+#[test]
+fn stratified_path_equals_the_general_3d_path() {
+    // The acceptance check of the 2-D path: same endpoints as the 3-D lanes
+    // kernel (and the scalar tracer, above) on media without hot spots.
+    let mut rng = Rng(11);
+    let batch =
+        BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 })).unwrap();
+    let mut worst = 0.0f64;
+    for (name, medium) in media().into_iter().take(2) {
+        let field = medium.field();
+        let jobs = random_jobs(&mut rng, 4 * LANES + 1);
+        for isa in Isa::available() {
+            let mut general = vec![dummy(); jobs.len()];
+            trace_batch_3d(isa, &field, &jobs, &batch, &mut general);
+            let mut flat = vec![dummy(); jobs.len()];
+            trace_batch_2d(isa, &field, &jobs, &batch, &mut flat).unwrap();
+            worst = worst.max(compare(&format!("{name}, {isa:?}"), &general, &flat));
+        }
+    }
+    eprintln!("stratified vs 3-D: max endpoint diff {worst:.2e} m");
+    // Hot spots: the 2-D path declines.
+    let hot = &media()[2].1;
+    let mut out = vec![dummy(); 1];
+    assert_eq!(
+        trace_batch_2d(
+            Isa::Baseline,
+            &hot.field(),
+            &random_jobs(&mut rng, 1),
+            &batch,
+            &mut out
+        ),
+        Err(NotStratified)
+    );
+}
+
+#[test]
+fn empty_batch_is_fine() {
+    let batch =
+        BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 })).unwrap();
+    for (_, m) in media() {
+        assert!(trace_batch(&m.field(), &[], &batch).is_empty());
+    }
+    assert!(
+        BatchOptions::from_trace_options(&TraceOptions::new(Method::Dopri5 { tolerance: 1e-9 }))
+            .is_none()
+    );
+}
+
+/// Distance in units in the last place between two finite non-negative
+/// doubles.
+fn ulps(a: f64, b: f64) -> u64 {
+    a.to_bits().abs_diff(b.to_bits())
+}
+
+#[test]
+fn polynomial_exp_is_within_its_documented_error() {
+    let mut rng = Rng(5);
+    // The tracer's arguments are −|t| for any t; cover the whole normal range
+    // uniformly, and [−40, 0] (where σ is not saturated) densely.
+    let mut xs: Vec<f64> = (0..2_000_000).map(|_| rng.uniform(-708.0, 709.0)).collect();
+    xs.extend((0..8_000_000).map(|_| rng.uniform(-40.0, 0.0)));
+    xs.extend([
+        0.0,
+        -0.0,
+        -708.0,
+        709.0,
+        1e-300,
+        -1e-300,
+        -0.5 * std::f64::consts::LN_2,
+    ]);
+    for isa in Isa::available() {
+        let mut ys = xs.clone();
+        exp_in_place(isa, &mut ys);
+        let worst = xs
+            .iter()
+            .zip(&ys)
+            .map(|(x, y)| ulps(*y, x.exp()))
+            .max()
+            .unwrap();
+        eprintln!(
+            "exp {isa:?}: max error {worst} ulp over {} arguments",
+            xs.len()
+        );
+        let bound = if isa == Isa::Baseline { 2 } else { 1 };
+        assert!(worst <= bound, "{isa:?}: {worst} ulp");
+        // Below −708: exactly 0, never NaN, also for huge negative arguments.
+        let mut tail = vec![
+            -708.0001,
+            -709.0,
+            -745.2,
+            -800.0,
+            -1e300,
+            f64::MIN,
+            f64::NEG_INFINITY,
+        ];
+        let reference: Vec<f64> = tail.iter().map(|x| x.exp()).collect();
+        exp_in_place(isa, &mut tail);
+        for (y, r) in tail.iter().zip(reference) {
+            assert_eq!(*y, 0.0);
+            assert!((y - r).abs() <= (-708.0f64).exp());
+        }
+        let mut big = vec![709.8, 1e300, f64::INFINITY];
+        exp_in_place(isa, &mut big);
+        assert!(big.iter().all(|y| *y == f64::INFINITY));
+    }
+    // The public scalar entry point.
+    assert_eq!(fastexp::exp(-1e300), 0.0);
+    assert!(ulps(fastexp::exp(-1.0), (-1.0f64).exp()) <= 2);
+}
