@@ -79,9 +79,16 @@ fn without_timing(v: &mut serde_json::Value) {
 
 #[test]
 fn fit_results_are_identical_with_one_and_two_threads() {
-    // fata-morgana exercises the parallel restarts as well as parallel pairs.
-    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/fata-morgana.json");
+    // A target objective of 0 cannot be met, so `auto` runs everything it has:
+    // LM, the restarts in parallel, Nelder–Mead and the LM polish.
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/fata-morgana.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&source).unwrap()).unwrap();
+    v["solver"]["target_objective"] = serde_json::json!(0.0);
+    v["solver"]["starts"] = serde_json::json!(4);
     let dir = tempfile::tempdir().unwrap();
+    let problem = dir.path().join("problem.json");
+    std::fs::write(&problem, v.to_string()).unwrap();
     let mut results = Vec::new();
     for threads in ["1", "2"] {
         let out = dir.path().join(format!("r{threads}.json"));
@@ -102,9 +109,23 @@ fn fit_results_are_identical_with_one_and_two_threads() {
         without_timing(&mut v);
         results.push(v);
     }
-    assert!(
-        results[0]["runs"].as_array().unwrap().len() > 1,
-        "restarts ran"
+    let labels: Vec<&str> = results[0]["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        labels,
+        [
+            "lm",
+            "lm (start 1)",
+            "lm (start 2)",
+            "lm (start 3)",
+            "lm (start 4)",
+            "nelder-mead",
+            "lm (polish)"
+        ]
     );
     assert_eq!(results[0], results[1]);
 }

@@ -202,6 +202,12 @@ fn describe(reason: Option<&TerminationReason>) -> (String, bool) {
     }
 }
 
+/// Initial damping τ of LM runs (μ₀ = τ·max diag JᵀJ, scaled). Measured on the
+/// bundled problems: with MINPACK's 1e-3 the first step of `fata-morgana` jumps
+/// into a local minimum (F = 1.83) that only restarts escape; 0.1 reaches the
+/// answer in 9 iterations and costs the other problems 2–5 iterations.
+const INITIAL_DAMPING: f64 = 0.1;
+
 /// One Levenberg–Marquardt run from `x0`.
 pub fn run_lm(
     objective: &Objective,
@@ -214,7 +220,8 @@ pub fn run_lm(
     let lower = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.0));
     let upper = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.1));
     let solver = LevenbergMarquardt::new()
-        .with_ftol(settings.ftol)
+        .with_initial_damping(INITIAL_DAMPING)
+        .and_then(|s| s.with_ftol(settings.ftol))
         .and_then(|s| s.with_xtol(settings.xtol))
         .and_then(|s| s.with_gtol(settings.gtol))
         .and_then(|s| s.with_bounds(lower, upper))
