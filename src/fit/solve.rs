@@ -162,10 +162,28 @@ impl Recorder {
         }
     }
 
-    fn take(&self) -> RunHistory {
-        RunHistory {
+    /// The finished run: its end point re-evaluated, and the recorded history.
+    fn finish(
+        &self,
+        objective: &Objective,
+        x0: &[f64],
+        end: Vec<f64>,
+        iterations: u64,
+        reason: String,
+        converged: bool,
+    ) -> Run {
+        Run {
             label: self.label.clone(),
-            records: self.records.lock().map(|r| r.clone()).unwrap_or_default(),
+            start: x0.to_vec(),
+            objective: objective.cost(&end),
+            end,
+            iterations,
+            reason,
+            converged,
+            history: RunHistory {
+                label: self.label.clone(),
+                records: self.records.lock().map(|r| r.clone()).unwrap_or_default(),
+            },
         }
     }
 }
@@ -240,16 +258,7 @@ pub fn run_lm(
         .map(|p| p.as_slice().to_vec())
         .unwrap_or_else(|| x0.to_vec());
     let (reason, converged) = describe(state.get_termination_reason());
-    Ok(Run {
-        label: label.into(),
-        start: x0.to_vec(),
-        objective: objective.cost(&end),
-        end,
-        iterations: state.get_iter(),
-        reason,
-        converged,
-        history: recorder.take(),
-    })
+    Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
 }
 
 /// One Nelder–Mead run from `x0`, inside the bounds.
@@ -302,16 +311,7 @@ pub fn run_nelder_mead(
         state.get_termination_reason(),
         Some(TerminationReason::SolverConverged)
     );
-    Ok(Run {
-        label: label.into(),
-        start: x0.to_vec(),
-        objective: objective.cost(&end),
-        end,
-        iterations: state.get_iter(),
-        reason,
-        converged,
-        history: recorder.take(),
-    })
+    Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
 }
 
 /// Deterministic starting points: uniform inside two-sided bounds, otherwise
