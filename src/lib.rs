@@ -14,6 +14,7 @@ pub mod math;
 pub mod medium;
 pub mod pair;
 pub mod plot;
+pub mod render;
 pub mod scene;
 pub mod trace;
 pub mod tradeoff;

@@ -73,6 +73,41 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Render a scene seen through its air along curved rays.
+    Render {
+        /// Scene file (JSON).
+        scene: PathBuf,
+        /// Output image (.png, tone-mapped sRGB).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write the linear HDR image here (.exr).
+        #[arg(long)]
+        exr: Option<PathBuf>,
+        /// Show the albedo of what each ray hits (the sky's colour for a miss).
+        #[arg(long)]
+        albedo: bool,
+        /// Straight rays (δ ≡ 0), for comparison.
+        #[arg(long)]
+        straight: bool,
+        /// Samples per pixel (overrides the scene).
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Image width in pixels (overrides the scene).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height in pixels (overrides the scene).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Sphere tracer: plain, enhanced or quadric (default).
+        #[arg(long)]
+        tracer: Option<String>,
+        /// Integrate every ray, even where a table of paths could be reused.
+        #[arg(long)]
+        no_path_reuse: bool,
+        /// No progress bar and no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -116,6 +151,32 @@ fn main() -> ExitCode {
             mirage::app::fit(problem, &options).map(|_| ())
         }
         Command::Rays { problem, output } => mirage::app::rays(problem, output),
+        Command::Render {
+            scene,
+            output,
+            exr,
+            albedo,
+            straight,
+            spp,
+            width,
+            height,
+            tracer,
+            no_path_reuse,
+            quiet,
+        } => mirage::render::render_command(&mirage::render::CommandOptions {
+            scene: scene.clone(),
+            output: output.clone(),
+            exr: exr.clone(),
+            albedo: *albedo,
+            straight: *straight,
+            spp: *spp,
+            width: *width,
+            height: *height,
+            tracer: tracer.clone(),
+            no_path_reuse: *no_path_reuse,
+            quiet: *quiet,
+        })
+        .map(|_| ()),
         Command::Tradeoff {
             problem,
             output,

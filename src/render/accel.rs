@@ -1,0 +1,502 @@
+//! Distance queries against the scene's objects: directly (every object's SDF
+//! at every query), or through a precomputed grid of unbounding spheres (the
+//! "quadric tracing" of the seed, in its simplest correct form).
+//!
+//! # The grid
+//!
+//! The box holding every object is cut into cells. Each cell stores
+//!
+//! - an **unbounding sphere**: its centre c and a radius r such that no surface
+//!   lies within r of c (a lower bound of the scene's distance at c). From any
+//!   point p the sphere gives the free radius `r − |p − c|` without touching an
+//!   object, and, better, the arc a ray can travel along its tangent before it
+//!   leaves the sphere (shrunk by the ray's largest possible bending);
+//! - the **near list**: the objects that may be nearest somewhere in the cell,
+//!   and one bound `far` on the distance to all the others from anywhere in the
+//!   cell. Near a surface the distance is `min(far, min over the near list)`:
+//!   exact where it matters, and never more than the true distance.
+//!
+//! Correctness rests on every object's SDF being a 1-Lipschitz lower bound of
+//! the true distance ([`crate::scene::sdf`]): from a bound d at c, no surface
+//! lies closer than `d − |p − c|` to p.
+
+use crate::scene::sdf::SceneObject;
+use glam::{DVec2, DVec3};
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lowest corner.
+    pub min: DVec3,
+    /// Highest corner.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// The box holding every object's bounding sphere; `None` for no objects;
+    /// infinite in every direction if an object is unbounded (a plane).
+    pub fn of_objects(objects: &[SceneObject]) -> Option<Aabb> {
+        let mut b: Option<Aabb> = None;
+        for o in objects {
+            let (c, r) = o.shape.bounding_sphere();
+            let s = Aabb {
+                min: c - DVec3::splat(r),
+                max: c + DVec3::splat(r),
+            };
+            b = Some(match b {
+                None => s,
+                Some(a) => Aabb {
+                    min: a.min.min(s.min),
+                    max: a.max.max(s.max),
+                },
+            });
+        }
+        b.map(|b| {
+            if b.min.is_finite() && b.max.is_finite() {
+                b
+            } else {
+                Aabb {
+                    min: DVec3::splat(f64::NEG_INFINITY),
+                    max: DVec3::splat(f64::INFINITY),
+                }
+            }
+        })
+    }
+
+    /// Whether every bound is finite.
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
+    /// Euclidean distance from `p` to the box (0 inside).
+    #[inline]
+    pub fn distance(&self, p: DVec3) -> f64 {
+        ((self.min - p).max(p - self.max)).max(DVec3::ZERO).length()
+    }
+
+    /// The parameter interval [t0, t1] (t0 ≥ 0) in which the line `o + t·d`
+    /// lies in the box, if any.
+    pub fn ray_interval(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let inv = d.recip();
+        let a = (self.min - o) * inv;
+        let b = (self.max - o) * inv;
+        // NaN (0·∞ for a ray in a face's plane) is dropped by min/max.
+        let t0 = a.min(b).max_element().max(0.0);
+        let t1 = a.max(b).min_element();
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    /// Whether the horizontal half-line `o + t·h` (t ≥ 0, in (x, z)) meets the
+    /// box's (x, z) rectangle; a zero `h` tests the point `o`.
+    pub fn halfline_meets_xz(&self, o: DVec2, h: DVec2) -> bool {
+        let (lo, hi) = (
+            DVec2::new(self.min.x, self.min.z),
+            DVec2::new(self.max.x, self.max.z),
+        );
+        let mut t0 = 0.0f64;
+        let mut t1 = f64::INFINITY;
+        for k in 0..2 {
+            let (o, h, lo, hi) = (o[k], h[k], lo[k], hi[k]);
+            if h == 0.0 {
+                if o < lo || o > hi {
+                    return false;
+                }
+            } else {
+                let (a, b) = ((lo - o) / h, (hi - o) / h);
+                t0 = t0.max(a.min(b));
+                t1 = t1.min(a.max(b));
+            }
+        }
+        t0 <= t1
+    }
+
+    /// The horizontal distance along `h` (unit, in (x, z)) from `o` after which
+    /// the half-line has left the box's (x, z) rectangle for good (0 if it never
+    /// meets it).
+    pub fn xz_exit(&self, o: DVec2, h: DVec2) -> f64 {
+        let (lo, hi) = (
+            DVec2::new(self.min.x, self.min.z),
+            DVec2::new(self.max.x, self.max.z),
+        );
+        let mut t0 = 0.0f64;
+        let mut t1 = f64::INFINITY;
+        for k in 0..2 {
+            let (o, h, lo, hi) = (o[k], h[k], lo[k], hi[k]);
+            if h == 0.0 {
+                if o < lo || o > hi {
+                    return 0.0;
+                }
+            } else {
+                let (a, b) = ((lo - o) / h, (hi - o) / h);
+                t0 = t0.max(a.min(b));
+                t1 = t1.min(a.max(b));
+            }
+        }
+        if t0 <= t1 { t1 } else { 0.0 }
+    }
+}
+
+/// The answer to a distance query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Query {
+    /// A lower bound of the distance from the point to every surface (negative
+    /// inside an object): the radius of a ball free of surfaces.
+    pub radius: f64,
+    /// The object that gave the bound, when it came from an object's SDF.
+    pub object: Option<usize>,
+}
+
+/// Work counters of distance queries.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Scene distance queries (sphere-tracing steps).
+    pub queries: u64,
+    /// Evaluations of one object's SDF (the expensive part).
+    pub object_evaluations: u64,
+}
+
+impl std::ops::AddAssign for Counters {
+    fn add_assign(&mut self, o: Counters) {
+        self.queries += o.queries;
+        self.object_evaluations += o.object_evaluations;
+    }
+}
+
+/// Where distances come from.
+#[derive(Clone, Debug)]
+pub enum SceneDistance {
+    /// Every object's SDF at every query.
+    Direct(Vec<SceneObject>),
+    /// The grid of unbounding spheres and near lists.
+    Grid(Box<Grid>),
+}
+
+impl SceneDistance {
+    /// The objects.
+    pub fn objects(&self) -> &[SceneObject] {
+        match self {
+            SceneDistance::Direct(o) => o,
+            SceneDistance::Grid(g) => &g.objects,
+        }
+    }
+
+    /// A lower bound of the distance from `p` to every surface.
+    #[inline]
+    pub fn query(&self, p: DVec3, counters: &mut Counters) -> Query {
+        counters.queries += 1;
+        match self {
+            SceneDistance::Direct(objects) => {
+                counters.object_evaluations += objects.len() as u64;
+                let mut best = Query {
+                    radius: f64::INFINITY,
+                    object: None,
+                };
+                for (i, o) in objects.iter().enumerate() {
+                    let d = o.shape.distance(p);
+                    if d < best.radius {
+                        best = Query {
+                            radius: d,
+                            object: Some(i),
+                        };
+                    }
+                }
+                best
+            }
+            SceneDistance::Grid(g) => g.query(p, counters),
+        }
+    }
+
+    /// A query at `p` for a ray with unit tangent `t` and curvature at most
+    /// `kappa`, with the arc length the ray can travel without meeting a
+    /// surface: the free radius itself, or more where an unbounding sphere
+    /// reaches further along the ray (grid only).
+    #[inline]
+    pub fn probe(&self, p: DVec3, t: DVec3, kappa: f64, counters: &mut Counters) -> (Query, f64) {
+        match self {
+            SceneDistance::Direct(_) => {
+                let q = self.query(p, counters);
+                (q, q.radius)
+            }
+            SceneDistance::Grid(g) => {
+                counters.queries += 1;
+                g.probe(p, t, kappa, counters)
+            }
+        }
+    }
+}
+
+/// The arc along the tangent `t` from `p` inside the sphere (c, r), shrunk so
+/// that a curve bending at most `kappa` cannot leave the sphere either: over
+/// an arc L the curve strays at most κL²/2 from its tangent.
+#[inline]
+fn sphere_arc(p: DVec3, t: DVec3, kappa: f64, c: DVec3, r: f64) -> f64 {
+    let exit = |r: f64| -> f64 {
+        // |p + s·t − c| = r for the larger root s.
+        let pc = p - c;
+        let b = pc.dot(t);
+        let q = pc.length_squared() - r * r;
+        let disc = b * b - q;
+        if q >= 0.0 || disc < 0.0 {
+            0.0
+        } else {
+            -b + disc.sqrt()
+        }
+    };
+    let l1 = exit(r);
+    if l1 <= 0.0 {
+        return 0.0;
+    }
+    exit(r - 0.5 * kappa * l1 * l1)
+}
+
+/// One grid cell.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    /// No surface lies within this distance of the cell's centre.
+    empty: f64,
+    /// Lower bound of the distance to every object not in the near list, from
+    /// anywhere in the cell.
+    far: f64,
+    /// The near list: `near[start .. start + len]`.
+    start: u32,
+    len: u32,
+}
+
+/// The grid of unbounding spheres (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Grid {
+    objects: Vec<SceneObject>,
+    bounds: Aabb,
+    floor: f64,
+    dims: [usize; 3],
+    cell: DVec3,
+    half_diag: f64,
+    cells: Vec<Cell>,
+    near: Vec<u32>,
+    /// Below this free radius a query evaluates the near list.
+    cheap_min: f64,
+}
+
+/// Largest number of cells of a grid.
+pub const MAX_CELLS: usize = 1 << 18;
+
+impl Grid {
+    /// Builds the grid over `objects` (which must all be bounded and
+    /// validated); `None` when there is nothing to accelerate.
+    ///
+    /// `floor`: the lowest height any query will be made at (the ground, when
+    /// rays stop there), or −∞. The grid is cut there: below it only parts of
+    /// objects lie that are farther from any point above the floor than their
+    /// vertical projection onto the floor, which is inside the grid, so the
+    /// distance to the grid's box still bounds them. A query below the floor
+    /// evaluates every object.
+    pub fn build(objects: &[SceneObject], floor: f64) -> Option<Grid> {
+        let bounds = Aabb::of_objects(objects)?;
+        if !bounds.is_finite() {
+            return None;
+        }
+        let pad = DVec3::splat(1e-3 * (1.0 + (bounds.max - bounds.min).max_element()));
+        let mut bounds = Aabb {
+            min: bounds.min - pad,
+            max: bounds.max + pad,
+        };
+        if floor.is_finite() && bounds.min.y < floor - pad.y {
+            bounds.min.y = (floor - pad.y).min(bounds.max.y - pad.y);
+        }
+        let size = bounds.max - bounds.min;
+        let volume = size.x * size.y * size.z;
+        let side = (volume / MAX_CELLS as f64).cbrt();
+        let dims = [0, 1, 2].map(|k| ((size[k] / side).ceil() as usize).clamp(1, 4096));
+        let cell = DVec3::new(
+            size.x / dims[0] as f64,
+            size.y / dims[1] as f64,
+            size.z / dims[2] as f64,
+        );
+        let half_diag = 0.5 * cell.length();
+        // An object is near a cell when it may come within a cell size of it:
+        // `far` is then at least that, so the near list decides wherever a step
+        // could be short, and hits (radius ≈ 0) are always on listed objects.
+        let near_reach = half_diag;
+        let spheres: Vec<(DVec3, f64)> =
+            objects.iter().map(|o| o.shape.bounding_sphere()).collect();
+
+        use rayon::prelude::*;
+        let n = dims[0] * dims[1] * dims[2];
+        let per_cell: Vec<(f64, f64, Vec<u32>)> = (0..n)
+            .into_par_iter()
+            .map(|idx| {
+                let (i, j, k) = (
+                    idx % dims[0],
+                    (idx / dims[0]) % dims[1],
+                    idx / (dims[0] * dims[1]),
+                );
+                let c =
+                    bounds.min + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * cell;
+                let mut empty = f64::INFINITY;
+                let mut far = f64::INFINITY;
+                let mut near = Vec::new();
+                for (o, obj) in objects.iter().enumerate() {
+                    let (sc, sr) = spheres[o];
+                    // Cheap first: the bounding sphere bounds the distance.
+                    let lb_sphere = (c - sc).length() - sr;
+                    let d_c = if lb_sphere - half_diag > near_reach {
+                        lb_sphere
+                    } else {
+                        obj.shape.distance(c)
+                    };
+                    empty = empty.min(d_c);
+                    let lb_cell = d_c - half_diag;
+                    if lb_cell > near_reach {
+                        far = far.min(lb_cell);
+                    } else {
+                        near.push(o as u32);
+                    }
+                }
+                (empty, far, near)
+            })
+            .collect();
+        let mut cells = Vec::with_capacity(n);
+        let mut near = Vec::new();
+        for (empty, far, list) in per_cell {
+            cells.push(Cell {
+                empty,
+                far,
+                start: near.len() as u32,
+                len: list.len() as u32,
+            });
+            near.extend(list);
+        }
+        Some(Grid {
+            objects: objects.to_vec(),
+            bounds,
+            floor: bounds.min.y,
+            dims,
+            cell,
+            half_diag,
+            cells,
+            near,
+            cheap_min: 0.25 * cell.min_element(),
+        })
+    }
+
+    /// Number of cells.
+    pub fn cell_count(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// The box the grid covers.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The cell holding (or nearest to) `p`, with its centre.
+    #[inline]
+    fn cell_of(&self, p: DVec3) -> (&Cell, DVec3) {
+        let q = (p - self.bounds.min) / self.cell;
+        let i = (q.x.floor().max(0.0) as usize).min(self.dims[0] - 1);
+        let j = (q.y.floor().max(0.0) as usize).min(self.dims[1] - 1);
+        let k = (q.z.floor().max(0.0) as usize).min(self.dims[2] - 1);
+        let c = self.bounds.min
+            + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
+        (&self.cells[i + self.dims[0] * (j + self.dims[1] * k)], c)
+    }
+
+    #[inline]
+    fn query(&self, p: DVec3, counters: &mut Counters) -> Query {
+        self.probe_cell(p, None, counters).0
+    }
+
+    #[inline]
+    fn probe(&self, p: DVec3, t: DVec3, kappa: f64, counters: &mut Counters) -> (Query, f64) {
+        let (q, arc) = self.probe_cell(p, Some((t, kappa)), counters);
+        (q, arc.max(q.radius))
+    }
+
+    /// The query at `p` and, for a ray with tangent and curvature bound
+    /// `ray`, the arc it can travel inside the cell's unbounding sphere (or
+    /// outside the grid's box).
+    #[inline]
+    fn probe_cell(
+        &self,
+        p: DVec3,
+        ray: Option<(DVec3, f64)>,
+        counters: &mut Counters,
+    ) -> (Query, f64) {
+        if p.y < self.floor {
+            counters.object_evaluations += self.objects.len() as u64;
+            let (radius, object) = crate::scene::sdf::nearest_object(&self.objects, p);
+            return (Query { radius, object }, 0.0);
+        }
+        let outside = self.bounds.distance(p);
+        let (cell, c) = self.cell_of(p);
+        let arc = match ray {
+            Some((t, kappa)) if t.is_finite() => {
+                if outside > 0.0 {
+                    self.box_arc(p, t, kappa)
+                } else {
+                    sphere_arc(p, t, kappa, c, cell.empty)
+                }
+            }
+            _ => 0.0,
+        };
+        let cheap = (cell.empty - (p - c).length()).max(outside);
+        if cheap >= self.cheap_min {
+            return (
+                Query {
+                    radius: cheap,
+                    object: None,
+                },
+                arc,
+            );
+        }
+        // From outside the grid the far bound holds only up to the distance
+        // to the cell (at most `outside`).
+        let mut best = Query {
+            radius: cell.far - outside,
+            object: None,
+        };
+        let list = &self.near[cell.start as usize..(cell.start + cell.len) as usize];
+        counters.object_evaluations += list.len() as u64;
+        for &o in list {
+            let d = self.objects[o as usize].shape.distance(p);
+            if d < best.radius {
+                best = Query {
+                    radius: d,
+                    object: Some(o as usize),
+                };
+            }
+        }
+        if cheap > best.radius {
+            // Both are lower bounds; the larger is the better one.
+            best = Query {
+                radius: cheap,
+                object: None,
+            };
+        }
+        (best, arc)
+    }
+
+    /// From outside the grid: the arc along the tangent before the ray can
+    /// enter the box (grown by how far a curve bending at most `kappa` strays
+    /// from its tangent over that arc).
+    fn box_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
+        // Any point of the box is within `reach` of p; along an arc no longer
+        // than that the curve stays within `m` of its tangent line.
+        let centre = 0.5 * (self.bounds.min + self.bounds.max);
+        let reach = (p - centre).length() + 0.5 * (self.bounds.max - self.bounds.min).length();
+        let m = 0.5 * kappa * reach * reach;
+        let grown = Aabb {
+            min: self.bounds.min - DVec3::splat(m),
+            max: self.bounds.max + DVec3::splat(m),
+        };
+        match grown.ray_interval(p, t) {
+            None => reach,
+            Some((t0, _)) => t0.min(reach),
+        }
+    }
+
+    /// Largest distance a cell's centre may be from a point of the cell.
+    pub fn half_diagonal(&self) -> f64 {
+        self.half_diag
+    }
+}

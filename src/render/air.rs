@@ -1,0 +1,423 @@
+//! What the renderer needs to know about the air beyond δ and ∇δ: bounds on n
+//! and on the rays' curvature (for safe sphere-tracing steps), where the air is
+//! not stratified (hot-spot zones), how long an RK4 step may be, and — from
+//! Snell's invariant — when a ray's fate is already decided.
+//!
+//! # Snell decisions
+//!
+//! Outside the hot-spot zones δ depends on y alone, so a ray keeps its vertical
+//! plane and `c = n·cos(elevation) = |v_h|` (v = n·t). It can reach a height y'
+//! only if `n(y') ≥ c`. With the stratified profile tabulated once (prefix and
+//! suffix minima of δ over height), a ray that will never again meet an object
+//! nor a zone is decided at once:
+//!
+//! - rising with `min_{y' ≥ y} n(y') > c`: it never turns down and leaves to
+//!   the sky, seen along its direction at the top of the model (where δ is
+//!   constant), from Snell: `cos(elevation_∞) = c / n_∞`;
+//! - descending with `min_{0 ≤ y' ≤ y} n(y') > c`: it reaches the ground (still
+//!   integrated, to find where, but with no more distance queries);
+//! - descending and turning before the ground (some tabulated n below it is < c),
+//!   then escaping as above: sky.
+//!
+//! Anything else (a ray trapped in a duct, a ray inside a zone) is integrated.
+
+use super::accel::Aabb;
+use crate::math::V3;
+use crate::medium::{C_SCALE, IndexField, LogisticField, LogisticMedium};
+use glam::{DVec2, DVec3};
+
+/// Where a logistic term's σ is within e^(−ZONE_UNITS) of its limit: the term
+/// is then constant to far below anything an image can show (δ changes by
+/// < 1e-8 of the term's amplitude, i.e. < 1e-12 in n).
+const ZONE_UNITS: f64 = 20.0;
+
+/// Largest factor by which a step may grow over the scene's step.
+const STEP_GROWTH_MAX: f64 = 32.0;
+
+/// A hot spot's region of influence: a vertical cylinder (disc radius R plus
+/// the rim's tail) up to the height where its layer has died out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Zone {
+    /// Centre x.
+    pub x: f64,
+    /// Centre z.
+    pub z: f64,
+    /// Radius of the cylinder (metres).
+    pub radius: f64,
+    /// Top of the cylinder (metres; infinite for a layer that grows upward).
+    pub top: f64,
+    /// |a| of a layer decaying upward (a < 0), else 0.
+    pub decay: f64,
+}
+
+impl Zone {
+    fn contains(&self, p: DVec3) -> bool {
+        p.y < self.top && DVec2::new(p.x - self.x, p.z - self.z).length() < self.radius
+    }
+
+    /// How much longer than the scene's step an RK4 step may be at height y:
+    /// every derivative of a layer σ(y/a) with a < 0 (and of its rim term)
+    /// decays like e^(−y/|a|) above the ground, and RK4's error per unit length
+    /// grows like h⁴ times those derivatives, so h ∝ e^(y/(4|a|)) keeps the
+    /// error per metre at its value at the ground. A layer that grows upward
+    /// (a > 0) keeps its rim at every height: no growth.
+    fn step_growth(&self, y: f64) -> f64 {
+        if self.decay > 0.0 {
+            (y.max(0.0) / (4.0 * self.decay))
+                .min(STEP_GROWTH_MAX.ln())
+                .exp()
+        } else {
+            1.0
+        }
+    }
+
+    fn distance(&self, p: DVec3) -> f64 {
+        let dh = (DVec2::new(p.x - self.x, p.z - self.z).length() - self.radius).max(0.0);
+        let dv = (p.y - self.top).max(0.0);
+        dh.hypot(dv)
+    }
+}
+
+/// The stratified part of δ tabulated over height, with running minima for
+/// Snell decisions.
+#[derive(Clone, Debug)]
+struct Profile {
+    dy: f64,
+    delta: Vec<f64>,
+    prefix_min: Vec<f64>,
+    suffix_min: Vec<f64>,
+    /// Bound on how far δ can dip between two samples, plus rounding.
+    margin: f64,
+}
+
+impl Profile {
+    fn top(&self) -> f64 {
+        self.dy * (self.delta.len() - 1) as f64
+    }
+
+    /// A lower bound of δ over [y, ∞) (y ≥ 0).
+    fn min_above(&self, y: f64) -> f64 {
+        let i = ((y / self.dy).floor() as usize).min(self.delta.len() - 1);
+        self.suffix_min[i] - self.margin
+    }
+
+    /// A lower bound of δ over [0, y].
+    fn min_below(&self, y: f64) -> f64 {
+        let i = ((y / self.dy).ceil() as usize).min(self.delta.len() - 1);
+        self.prefix_min[i] - self.margin
+    }
+
+    /// Whether some tabulated height in [0, y] has δ < `c1` exactly (then a
+    /// descending ray with `n·cos = 1 + c1` turns before reaching it).
+    fn dips_below(&self, y: f64, c1: f64) -> bool {
+        let i = ((y / self.dy).floor() as usize).min(self.delta.len() - 1);
+        self.prefix_min[i] < c1
+    }
+
+    fn at_top(&self) -> f64 {
+        self.delta[self.delta.len() - 1]
+    }
+}
+
+/// The fate of a ray decided early (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fate {
+    /// It will meet nothing: the sky, seen along this final unit direction.
+    Sky(DVec3),
+    /// It will reach the ground and nothing else: integrate it there without
+    /// distance queries.
+    GroundBound,
+}
+
+/// The air as the renderer sees it.
+#[derive(Clone, Debug)]
+pub struct Air {
+    field: LogisticField,
+    straight: bool,
+    stratified: bool,
+    n_max: f64,
+    curvature_max: f64,
+    step_inside: f64,
+    step_outside: f64,
+    zones: Vec<Zone>,
+    profile: Profile,
+    ground: bool,
+    objects: Option<Aabb>,
+}
+
+/// Every logistic term as (amplitude share, rate, centre height), the share
+/// being |n|/S so that C·|k_s|·share bounds the term's δ.
+fn terms(m: &LogisticMedium) -> Vec<(f64, f64, f64)> {
+    let s = m.amplitude_sum();
+    let share = |n: f64| if s > 0.0 { n.abs() / s } else { 0.0 };
+    let mut out = Vec::new();
+    if let Some(b) = &m.background {
+        out.push((share(b.n), b.a, 0.0));
+    }
+    if let Some(i) = &m.inversion {
+        out.push((share(i.n), i.a, i.height));
+    }
+    out
+}
+
+impl Air {
+    /// Analyses `medium` (or δ ≡ 0 when `straight`) for rendering with RK4
+    /// steps of `step` metres. `ground`: whether the plane y = 0 stops rays;
+    /// `objects`: the box holding every object (None: no objects).
+    pub fn new(
+        medium: &LogisticMedium,
+        straight: bool,
+        step: f64,
+        ground: bool,
+        objects: Option<Aabb>,
+    ) -> Air {
+        let medium = if straight || !medium.has_terms() {
+            LogisticMedium::vacuum()
+        } else {
+            medium.clone()
+        };
+        let straight = !medium.has_terms();
+        let field = medium.field();
+        let k = C_SCALE * medium.scale.abs();
+        let s = medium.amplitude_sum();
+        let (n_max, curvature_max) = if straight {
+            (1.0, 0.0)
+        } else {
+            // |D/S| ≤ 1 since every σ and w lies in [0, 1]; |σ'| ≤ 1/4.
+            let mut g = 0.0;
+            for (share, a, _) in terms(&medium) {
+                g += share * 0.25 / a.abs();
+            }
+            for h in &medium.hotspots {
+                let share = h.n.abs() / s;
+                g += share * 0.25 * (1.0 / h.a.abs() + h.edge);
+            }
+            ((1.0 + k), k * g / (1.0 - k))
+        };
+
+        let zones: Vec<Zone> = medium
+            .hotspots
+            .iter()
+            .map(|h| Zone {
+                x: h.x,
+                z: h.z,
+                radius: h.radius + ZONE_UNITS / h.edge,
+                top: if h.a < 0.0 {
+                    ZONE_UNITS * h.a.abs()
+                } else {
+                    f64::INFINITY
+                },
+                decay: if h.a < 0.0 { h.a.abs() } else { 0.0 },
+            })
+            .collect();
+
+        // Finest feature of the whole air, and of its stratified part: steps
+        // outside the zones may grow by their ratio (capped), since RK4's error
+        // scales with (step / feature)^4.
+        let strat_scale = terms(&medium)
+            .iter()
+            .map(|t| t.1.abs())
+            .fold(f64::INFINITY, f64::min);
+        let fine_scale = medium
+            .hotspots
+            .iter()
+            .flat_map(|h| [h.a.abs(), 1.0 / h.edge])
+            .fold(strat_scale, f64::min);
+        let step_inside = if straight { f64::INFINITY } else { step };
+        let step_outside = if straight {
+            f64::INFINITY
+        } else if fine_scale.is_finite() {
+            step * (strat_scale / fine_scale).clamp(1.0, STEP_GROWTH_MAX)
+        } else {
+            STEP_GROWTH_MAX * step
+        };
+
+        let profile = Self::profile(&field, &medium, curvature_max * n_max);
+        Air {
+            field,
+            straight,
+            stratified: medium.hotspots.is_empty(),
+            n_max,
+            curvature_max,
+            step_inside,
+            step_outside,
+            zones,
+            profile,
+            ground,
+            objects,
+        }
+    }
+
+    fn profile(field: &LogisticField, medium: &LogisticMedium, gradient_max: f64) -> Profile {
+        let ts = terms(medium);
+        let top = ts
+            .iter()
+            .map(|&(_, a, c)| c + 2.0 * ZONE_UNITS * a.abs())
+            .fold(100.0, f64::max)
+            .min(50_000.0);
+        let finest = ts.iter().map(|t| t.1.abs()).fold(f64::INFINITY, f64::min);
+        let dy = (finest / 16.0).max(top / 400_000.0).min(1.0);
+        let n = (top / dy).ceil() as usize + 1;
+        // Far outside every hot spot the rim factor w underflows to exactly 0,
+        // leaving the stratified terms (with the full S, as in the model).
+        let far = 1e12;
+        let delta: Vec<f64> = (0..n)
+            .map(|i| field.delta(V3::new(far, i as f64 * dy, far)))
+            .collect();
+        let mut prefix_min = delta.clone();
+        for i in 1..n {
+            prefix_min[i] = prefix_min[i - 1].min(delta[i]);
+        }
+        let mut suffix_min = delta.clone();
+        for i in (0..n - 1).rev() {
+            suffix_min[i] = suffix_min[i + 1].min(delta[i]);
+        }
+        Profile {
+            dy,
+            delta,
+            prefix_min,
+            suffix_min,
+            margin: 0.5 * gradient_max * dy + 1e-15,
+        }
+    }
+
+    /// The compiled field (δ ≡ 0 when straight).
+    pub fn field(&self) -> &LogisticField {
+        &self.field
+    }
+
+    /// Whether δ ≡ 0 (rays are straight lines).
+    pub fn is_straight(&self) -> bool {
+        self.straight
+    }
+
+    /// Whether δ depends on the height alone.
+    pub fn is_stratified(&self) -> bool {
+        self.stratified
+    }
+
+    /// An upper bound of n over all space: a τ step h covers at most h·n_max
+    /// of arc length.
+    pub fn n_max(&self) -> f64 {
+        self.n_max
+    }
+
+    /// An upper bound of a ray's curvature |dt/ds| = |∇n⊥|/n (1/metre).
+    pub fn curvature_max(&self) -> f64 {
+        self.curvature_max
+    }
+
+    /// The hot-spot zones.
+    pub fn zones(&self) -> &[Zone] {
+        &self.zones
+    }
+
+    /// Whether `p` lies in a hot-spot zone (where the air is not stratified).
+    pub fn in_zone(&self, p: DVec3) -> bool {
+        self.zones.iter().any(|z| z.contains(p))
+    }
+
+    /// The RK4 step (arc length, metres) to take from `p`: in a zone, the
+    /// scene's step, grown with the height above a layer that decays upward
+    /// (by e^(y/(4|a|)), which keeps RK4's error per metre constant); outside, the longer stratified step, but
+    /// never so long that a step leaps into a zone from afar. Infinite for
+    /// straight rays.
+    pub fn step_at(&self, p: DVec3) -> f64 {
+        if self.zones.is_empty() {
+            return self.step_outside;
+        }
+        let mut inside = f64::INFINITY;
+        let mut approach = f64::INFINITY;
+        for z in &self.zones {
+            let grown = self.step_inside * z.step_growth(p.y);
+            let d = z.distance(p);
+            if d == 0.0 {
+                inside = inside.min(grown);
+            } else {
+                approach = approach.min(grown.max(d));
+            }
+        }
+        self.step_outside.min(inside).min(approach)
+    }
+
+    /// δ of the stratified terms at height y (exact, from the field).
+    pub fn stratified_delta(&self, y: f64) -> f64 {
+        self.field.delta(V3::new(1e12, y, 1e12))
+    }
+
+    /// Whether a ray at height `y` ≥ 0 with `c = |v_h|`, rising, can never
+    /// turn down again (Snell, with the profile's margin: false when unsure).
+    pub fn escapes(&self, y: f64, c: f64) -> bool {
+        y >= 0.0 && self.profile.min_above(y) > c - 1.0
+    }
+
+    /// The direction in which a ray with horizontal unit direction `h` and
+    /// invariant `c` leaves the top of the model (where δ is constant).
+    pub fn asymptotic_direction(&self, h: DVec2, c: f64) -> DVec3 {
+        let n_top = 1.0 + self.profile.at_top();
+        let vy = (n_top * n_top - c * c).max(0.0).sqrt();
+        DVec3::new(h.x * c, vy, h.y * c).normalize()
+    }
+
+    /// The elevation (radians) at which a ray leaves the top of the model.
+    pub fn asymptotic_elevation(&self, c: f64) -> f64 {
+        let n_top = 1.0 + self.profile.at_top();
+        (c / n_top).clamp(-1.0, 1.0).acos()
+    }
+
+    /// Height of the top of the tabulated profile (metres).
+    pub fn profile_top(&self) -> f64 {
+        self.profile.top()
+    }
+
+    /// The fate of a ray at `p` with ray vector `v` (= n·t), if it is already
+    /// decided: see the module documentation. `None`: keep integrating.
+    pub fn fate(&self, p: DVec3, v: DVec3) -> Option<Fate> {
+        if p.y < 0.0 || v.y == 0.0 || self.in_zone(p) {
+            return None;
+        }
+        let vh = DVec2::new(v.x, v.z);
+        let c = vh.length();
+        let c1 = c - 1.0;
+        let rising = v.y > 0.0;
+        let escape = self.profile.min_above(p.y) > c1;
+        // The heights the ray will visit, and whether it ends on the ground.
+        let (low, high, ground_bound) = if rising {
+            if !escape {
+                return None;
+            }
+            (p.y, f64::INFINITY, false)
+        } else if self.ground && self.profile.min_below(p.y) > c1 {
+            (0.0, p.y, true)
+        } else if self.profile.dips_below(p.y, c1) && escape {
+            (0.0, f64::INFINITY, false)
+        } else {
+            return None;
+        };
+        let h = if c > 0.0 { vh / c } else { DVec2::ZERO };
+        let origin = DVec2::new(p.x, p.z);
+        if let Some(b) = &self.objects
+            && low <= b.max.y
+            && high >= b.min.y
+            && b.halfline_meets_xz(origin, h)
+        {
+            return None;
+        }
+        for z in &self.zones {
+            if low < z.top && halfline_meets_disc(origin, h, DVec2::new(z.x, z.z), z.radius) {
+                return None;
+            }
+        }
+        Some(if ground_bound {
+            Fate::GroundBound
+        } else {
+            Fate::Sky(self.asymptotic_direction(h, c))
+        })
+    }
+}
+
+/// Whether the half-line `o + t·h` (t ≥ 0; h unit or zero) meets the disc.
+fn halfline_meets_disc(o: DVec2, h: DVec2, centre: DVec2, radius: f64) -> bool {
+    let t = (centre - o).dot(h).max(0.0);
+    (o + h * t - centre).length() <= radius
+}

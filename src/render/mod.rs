@@ -1,0 +1,689 @@
+//! The CPU renderer: scenes of SDF objects seen through refracting air along
+//! curved rays.
+//!
+//! Data flow: a [`Scene`] file → [`Renderer::new`] (camera, [`air::Air`]
+//! analysis, distance acceleration, and for stratified air a
+//! [`paths::PathTable`]) → per sample a ray ([`march`]) ending on an object, the
+//! ground or the sky → shading → a linear HDR image ([`Rendered`]) → PNG
+//! (tone-mapped sRGB) and EXR (linear), written atomically.
+//!
+//! - **Rays** are integrated with RK4 in the τ form of the ray equation and
+//!   sphere-traced with steps bounded by the scene's distance, so thin objects
+//!   are never stepped over ([`march`]); with `straight`, δ ≡ 0.
+//! - **Shading** ([`Shading::Lit`]): Lambert under the sun with a shadow ray,
+//!   plus ambient light from the sky. Shadow rays are straight: the sun is
+//!   degrees above the horizon while refraction bends rays by fractions of a
+//!   milliradian over an object's shadow, far below a pixel's worth of shadow
+//!   edge at any sensible sun elevation. [`Shading::Albedo`] shows the albedo
+//!   of what a ray hits (the sky's radiance for a miss), for validation.
+//! - **Speed**: rayon over 16 × 16 tiles with an indicatif progress bar; each
+//!   pixel depends on nothing but its own samples, so the image is bitwise the
+//!   same for any number of threads.
+
+pub mod accel;
+pub mod air;
+pub mod camera;
+pub mod march;
+pub mod output;
+pub mod paths;
+pub mod sky;
+
+use crate::error::{Error, Result};
+use crate::io::{check_not_input, write_atomic};
+use crate::plot::ImageFormat;
+use crate::scene::Scene;
+use accel::{Aabb, Counters, Grid, SceneDistance};
+use air::Air;
+use camera::{Camera, sample_offset};
+use glam::DVec3;
+use march::{HitTolerance, MarchStats, Marcher, Outcome, TracerKind};
+use paths::{PathTable, TableSettings, TableStats};
+use rayon::prelude::*;
+use sky::{Sky, SkyModel};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Side of the square tiles the image is split into for the threads.
+pub const TILE: u32 = 16;
+
+/// What a pixel shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Shading {
+    /// Sunlight with shadows and sky light.
+    #[default]
+    Lit,
+    /// The albedo of what the ray hits; the sky's radiance for a miss.
+    Albedo,
+}
+
+/// How to render, beyond the scene file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Lit or albedo.
+    pub shading: Shading,
+    /// δ ≡ 0: straight rays, for comparison.
+    pub straight: bool,
+    /// The sphere tracer.
+    pub tracer: TracerKind,
+    /// For stratified air, reuse a table of paths across the image.
+    pub path_reuse: bool,
+    /// Overrides the scene's samples per pixel.
+    pub samples_per_pixel: Option<u32>,
+    /// Overrides the image width (the height follows the aspect ratio unless
+    /// given too).
+    pub width: Option<u32>,
+    /// Overrides the image height.
+    pub height: Option<u32>,
+    /// Draw a progress bar on stderr.
+    pub progress: bool,
+    /// The hit tolerance as a fraction of a pixel's footprint.
+    pub hit_fraction: f64,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            shading: Shading::Lit,
+            straight: false,
+            tracer: TracerKind::default(),
+            path_reuse: true,
+            samples_per_pixel: None,
+            width: None,
+            height: None,
+            progress: false,
+            hit_fraction: 0.05,
+        }
+    }
+}
+
+/// Work and time of a render.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Camera samples traced.
+    pub samples: u64,
+    /// Of which along interpolated table paths.
+    pub table_samples: u64,
+    /// Camera-ray work.
+    pub march: MarchStats,
+    /// Shadow-ray distance work.
+    pub shadow: Counters,
+    /// The path table, if one was built.
+    pub table: Option<TableStats>,
+    /// Seconds spent building the table.
+    pub table_seconds: f64,
+    /// Seconds spent building the distance grid.
+    pub grid_seconds: f64,
+    /// Seconds spent tracing and shading.
+    pub trace_seconds: f64,
+}
+
+/// A rendered image: linear HDR RGB, row-major, top row first.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// Width (pixels).
+    pub width: u32,
+    /// Height (pixels).
+    pub height: u32,
+    /// Linear RGB per pixel.
+    pub pixels: Vec<[f32; 3]>,
+    /// Work and time.
+    pub stats: RenderStats,
+}
+
+impl Rendered {
+    /// The pixel at column `x`, row `y`.
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// A scene prepared for rendering.
+pub struct Renderer {
+    scene: Scene,
+    options: RenderOptions,
+    camera: Camera,
+    air: Air,
+    distance: SceneDistance,
+    sky: SkyModel,
+    table: Option<PathTable>,
+    samples: u32,
+    setup: RenderStats,
+    objects_box: Option<Aabb>,
+}
+
+impl Renderer {
+    /// Prepares `scene` for rendering: the camera, the air's analysis, the
+    /// distance grid (quadric tracer) and, for stratified air, the path table.
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Renderer {
+        let (w0, h0) = (scene.camera.width, scene.camera.height);
+        let (width, height) = match (options.width, options.height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (
+                w,
+                ((w as f64 * h0 as f64 / w0 as f64).round() as u32).max(1),
+            ),
+            (None, Some(h)) => (
+                ((h as f64 * w0 as f64 / h0 as f64).round() as u32).max(1),
+                h,
+            ),
+            (None, None) => (w0, h0),
+        };
+        let camera = Camera::with_size(&scene.camera, width, height);
+        let objects_box = Aabb::of_objects(&scene.objects);
+        let air = Air::new(
+            &scene.medium,
+            options.straight,
+            scene.step,
+            scene.ground.is_some(),
+            objects_box,
+        );
+        let mut setup = RenderStats::default();
+        let start = Instant::now();
+        let distance = match options.tracer {
+            TracerKind::Plain | TracerKind::Enhanced => {
+                SceneDistance::Direct(scene.objects.clone())
+            }
+            TracerKind::Quadric => {
+                let floor = if scene.ground.is_some() {
+                    0.0
+                } else {
+                    f64::NEG_INFINITY
+                };
+                match Grid::build(&scene.objects, floor) {
+                    Some(g) => SceneDistance::Grid(Box::new(g)),
+                    None => SceneDistance::Direct(scene.objects.clone()),
+                }
+            }
+        };
+        setup.grid_seconds = start.elapsed().as_secs_f64();
+        let samples = options
+            .samples_per_pixel
+            .unwrap_or(scene.samples_per_pixel)
+            .max(1);
+        let mut r = Renderer {
+            scene: scene.clone(),
+            options: *options,
+            camera,
+            air,
+            distance,
+            sky: SkyModel::from_spec(&scene.sky),
+            table: None,
+            samples,
+            setup,
+            objects_box,
+        };
+        if options.path_reuse && r.air.is_stratified() && !r.air.is_straight() {
+            let start = Instant::now();
+            let table = r.build_table();
+            r.setup.table_seconds = start.elapsed().as_secs_f64();
+            r.setup.table = Some(table.stats());
+            r.table = Some(table);
+        }
+        r
+    }
+
+    fn build_table(&self) -> PathTable {
+        let (lo, hi) = self.elevation_range();
+        let px = self.camera.pixel_angle();
+        let settings = TableSettings {
+            theta_range: (lo - 2.0 * px, hi + 2.0 * px),
+            initial_spacing: 4.0 * px,
+            min_spacing: px / 512.0,
+            tolerance: 0.02 * px,
+            step: self.scene.step,
+            max_distance: self.scene.max_distance,
+            ground: self.scene.ground.is_some(),
+        };
+        PathTable::build(
+            &self.air,
+            self.camera.origin,
+            &self.scene.objects,
+            &settings,
+        )
+    }
+
+    /// The lowest and highest elevation (radians) of the image's rays: the
+    /// border, where the extremes of a pinhole image lie, and a coarse
+    /// interior grid for safety (a ray outside the table is simply integrated).
+    fn elevation_range(&self) -> (f64, f64) {
+        let (w, h) = (self.camera.width as f64, self.camera.height as f64);
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        let mut see = |px: f64, py: f64| {
+            let d = self.camera.direction(px, py);
+            let e = d.y.atan2(d.x.hypot(d.z));
+            lo = lo.min(e);
+            hi = hi.max(e);
+        };
+        let n = 256;
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            see(t * w, 0.0);
+            see(t * w, h);
+            see(0.0, t * h);
+            see(w, t * h);
+            for j in 0..=16 {
+                see(t * w, j as f64 / 16.0 * h);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The camera (at the rendered size).
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The air as analysed.
+    pub fn air(&self) -> &Air {
+        &self.air
+    }
+
+    /// The path table, if the air is stratified and path reuse is on.
+    pub fn table(&self) -> Option<&PathTable> {
+        self.table.as_ref()
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Samples per pixel.
+    pub fn samples_per_pixel(&self) -> u32 {
+        self.samples
+    }
+
+    /// The marcher for this scene and these options.
+    pub fn marcher(&self) -> Marcher<'_> {
+        Marcher {
+            air: &self.air,
+            distance: &self.distance,
+            omega: match self.options.tracer {
+                TracerKind::Plain => 1.0,
+                TracerKind::Enhanced | TracerKind::Quadric => march::OMEGA,
+            },
+            tolerance: HitTolerance {
+                absolute: 1e-4,
+                relative: self.options.hit_fraction * self.camera.pixel_angle(),
+            },
+            max_distance: self.scene.max_distance,
+            ground: self.scene.ground.is_some(),
+        }
+    }
+
+    /// Traces the camera ray along the unit direction `dir`: along the path
+    /// table when there is one that covers it, else by integration.
+    pub fn trace(&self, dir: DVec3, stats: &mut MarchStats) -> Outcome {
+        if let Some(t) = &self.table
+            && let Some(ray) = t.ray(dir)
+        {
+            return self.marcher().march_table(t, &ray, stats);
+        }
+        self.marcher().march(self.camera.origin, dir, stats)
+    }
+
+    /// Traces the camera ray through continuous pixel coordinates (px, py).
+    pub fn trace_pixel(&self, px: f64, py: f64, stats: &mut MarchStats) -> Outcome {
+        self.trace(self.camera.direction(px, py), stats)
+    }
+
+    /// The linear RGB a ray's outcome shows.
+    pub fn shade(&self, outcome: &Outcome, shadow: &mut Counters) -> [f64; 3] {
+        match *outcome {
+            Outcome::Sky { direction } => self.sky.radiance(direction),
+            Outcome::Object {
+                index,
+                point,
+                distance,
+                ..
+            } => {
+                let obj = &self.distance.objects()[index];
+                let albedo = obj.albedo;
+                if self.options.shading == Shading::Albedo {
+                    return albedo;
+                }
+                let mut n = obj.shape.normal(point);
+                if n == DVec3::ZERO {
+                    n = DVec3::Y;
+                }
+                let eps = self
+                    .marcher()
+                    .tolerance
+                    .absolute
+                    .max(self.marcher().tolerance.relative * distance);
+                self.light(point + n * (2.0 * eps + 1e-4), n, albedo, shadow)
+            }
+            Outcome::Ground { point, .. } => {
+                let albedo = self
+                    .scene
+                    .ground
+                    .map_or([0.0; 3], |g| g.at(point.x, point.z));
+                if self.options.shading == Shading::Albedo {
+                    return albedo;
+                }
+                self.light(point + DVec3::Y * 1e-3, DVec3::Y, albedo, shadow)
+            }
+        }
+    }
+
+    /// Lambert under the sun (if it is up and not blocked) plus sky light.
+    fn light(&self, p: DVec3, n: DVec3, albedo: [f64; 3], shadow: &mut Counters) -> [f64; 3] {
+        let sun = &self.scene.sun;
+        let cos = n.dot(sun.direction);
+        let direct = if cos > 0.0 && sun.direction.y > 0.0 && self.sunlit(p, sun.direction, shadow)
+        {
+            cos / std::f64::consts::PI
+        } else {
+            0.0
+        };
+        let ambient = self.sky.ambient();
+        let hemi = 0.5 + 0.5 * n.y;
+        [0, 1, 2].map(|c| albedo[c] * (sun.irradiance[c] * direct + ambient[c] * hemi))
+    }
+
+    /// Whether the straight ray from `p` toward the sun meets no object.
+    fn sunlit(&self, p: DVec3, d: DVec3, counters: &mut Counters) -> bool {
+        let Some(bx) = self.objects_box else {
+            return true;
+        };
+        let Some((t0, t1)) = bx.ray_interval(p, d) else {
+            return true;
+        };
+        let mut t = t0;
+        for _ in 0..512 {
+            let q = self.distance.query(p + d * t, counters);
+            if q.radius < 1e-4 + 1e-7 * t {
+                return false;
+            }
+            t += q.radius;
+            if t > t1 {
+                return true;
+            }
+        }
+        true
+    }
+
+    /// Renders the image.
+    pub fn render(&self) -> Rendered {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let tiles_x = w.div_ceil(TILE);
+        let tiles_y = h.div_ceil(TILE);
+        let n_tiles = (tiles_x * tiles_y) as u64;
+        let bar = if self.options.progress {
+            let b = indicatif::ProgressBar::with_draw_target(
+                Some(n_tiles),
+                indicatif::ProgressDrawTarget::stderr(),
+            );
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})",
+            ) {
+                b.set_style(style.progress_chars("=> "));
+            }
+            b.set_message(format!("rendering {w}×{h}"));
+            b
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        let start = Instant::now();
+        let tiles: Vec<(Vec<[f32; 3]>, RenderStats)> = (0..n_tiles as u32)
+            .into_par_iter()
+            .map(|t| {
+                let out = self.render_tile(t % tiles_x, t / tiles_x);
+                bar.inc(1);
+                out
+            })
+            .collect();
+        bar.finish_and_clear();
+        let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+        let mut stats = self.setup;
+        for (t, (tile, s)) in tiles.into_iter().enumerate() {
+            let (tx, ty) = (t as u32 % tiles_x, t as u32 / tiles_x);
+            let x0 = tx * TILE;
+            let y0 = ty * TILE;
+            let tw = TILE.min(w - x0);
+            for (k, px) in tile.into_iter().enumerate() {
+                let (dx, dy) = (k as u32 % tw, k as u32 / tw);
+                pixels[((y0 + dy) * w + x0 + dx) as usize] = px;
+            }
+            stats.samples += s.samples;
+            stats.table_samples += s.table_samples;
+            stats.march += s.march;
+            stats.shadow += s.shadow;
+        }
+        stats.trace_seconds = start.elapsed().as_secs_f64();
+        Rendered {
+            width: w,
+            height: h,
+            pixels,
+            stats,
+        }
+    }
+
+    fn render_tile(&self, tx: u32, ty: u32) -> (Vec<[f32; 3]>, RenderStats) {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let (x0, y0) = (tx * TILE, ty * TILE);
+        let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+        let mut stats = RenderStats::default();
+        let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let mut sum = [0.0f64; 3];
+                for i in 0..self.samples {
+                    let (u, v) = sample_offset(i);
+                    let dir = self.camera.direction(x as f64 + u, y as f64 + v);
+                    let on_table = self.table.as_ref().and_then(|t| t.ray(dir).map(|r| (t, r)));
+                    let outcome = match &on_table {
+                        Some((t, ray)) => {
+                            stats.table_samples += 1;
+                            self.marcher().march_table(t, ray, &mut stats.march)
+                        }
+                        None => self
+                            .marcher()
+                            .march(self.camera.origin, dir, &mut stats.march),
+                    };
+                    let c = self.shade(&outcome, &mut stats.shadow);
+                    for k in 0..3 {
+                        sum[k] += c[k];
+                    }
+                    stats.samples += 1;
+                }
+                let inv = 1.0 / self.samples as f64;
+                out.push(sum.map(|s| (s * inv) as f32));
+            }
+        }
+        (out, stats)
+    }
+}
+
+/// Renders `scene` with `options` (convenience for [`Renderer::new`] and
+/// [`Renderer::render`]).
+pub fn render(scene: &Scene, options: &RenderOptions) -> Rendered {
+    Renderer::new(scene, options).render()
+}
+
+/// The arguments of `mirage render`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CommandOptions {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// Tone-mapped sRGB PNG output.
+    pub output: PathBuf,
+    /// Linear EXR output.
+    pub exr: Option<PathBuf>,
+    /// Albedo shading.
+    pub albedo: bool,
+    /// δ ≡ 0.
+    pub straight: bool,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Image width.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// `plain`, `enhanced` or `quadric`.
+    pub tracer: Option<String>,
+    /// Integrate every ray even in stratified air.
+    pub no_path_reuse: bool,
+    /// No progress bar, no summary.
+    pub quiet: bool,
+}
+
+/// `mirage render`: loads the scene, renders it and writes the PNG (and the
+/// EXR), atomically; prints a one-paragraph summary unless quiet.
+pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
+    let cli = Path::new("<command line>");
+    let scene = Scene::load(&o.scene)?;
+    match ImageFormat::from_path(&o.output)? {
+        ImageFormat::Png => {}
+        ImageFormat::Svg => {
+            return Err(Error::input(
+                &o.output,
+                "-",
+                "renders are raster images: use a .png output (and --exr for linear HDR)",
+            ));
+        }
+    }
+    if let Some(exr) = &o.exr {
+        let ext = exr
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if ext.as_deref() != Some("exr") {
+            return Err(Error::input(exr, "-", "the --exr output must end in .exr"));
+        }
+    }
+    let mut inputs: Vec<&Path> = vec![o.scene.as_path()];
+    inputs.extend(scene.inputs.iter().map(PathBuf::as_path));
+    check_not_input(&o.output, &inputs)?;
+    if let Some(exr) = &o.exr {
+        check_not_input(exr, &inputs)?;
+        if exr == &o.output {
+            return Err(Error::input(
+                exr,
+                "-",
+                "the EXR and PNG outputs must differ",
+            ));
+        }
+    }
+    let side = |field: &str, v: Option<u32>| -> Result<Option<u32>> {
+        match v {
+            Some(v) if v == 0 || v > crate::scene::description::MAX_IMAGE_SIDE => {
+                Err(Error::input(
+                    cli,
+                    field,
+                    format!(
+                        "must be between 1 and {} pixels, got {v}",
+                        crate::scene::description::MAX_IMAGE_SIDE
+                    ),
+                ))
+            }
+            v => Ok(v),
+        }
+    };
+    let width = side("--width", o.width)?;
+    let height = side("--height", o.height)?;
+    if let Some(n) = o.spp
+        && (n == 0 || n > crate::scene::description::MAX_SAMPLES_PER_PIXEL)
+    {
+        return Err(Error::input(
+            cli,
+            "--spp",
+            format!(
+                "must be between 1 and {}, got {n}",
+                crate::scene::description::MAX_SAMPLES_PER_PIXEL
+            ),
+        ));
+    }
+    let tracer = match &o.tracer {
+        None => TracerKind::default(),
+        Some(name) => TracerKind::from_name(name).ok_or_else(|| {
+            Error::input(
+                cli,
+                "--tracer",
+                format!("unknown tracer `{name}` (expected `plain`, `enhanced` or `quadric`)"),
+            )
+        })?,
+    };
+    let options = RenderOptions {
+        shading: if o.albedo {
+            Shading::Albedo
+        } else {
+            Shading::Lit
+        },
+        straight: o.straight,
+        tracer,
+        path_reuse: !o.no_path_reuse,
+        samples_per_pixel: o.spp,
+        width,
+        height,
+        progress: !o.quiet,
+        ..RenderOptions::default()
+    };
+    let renderer = Renderer::new(&scene, &options);
+    let image = renderer.render();
+    let tone = match options.shading {
+        Shading::Lit => output::ToneMap::Filmic { exposure: 1.0 },
+        Shading::Albedo => output::ToneMap::Clamp,
+    };
+    let png = output::encode_png(image.width, image.height, &image.pixels, tone)?;
+    let exr = match &o.exr {
+        Some(_) => Some(output::encode_exr(
+            image.width,
+            image.height,
+            &image.pixels,
+        )?),
+        None => None,
+    };
+    write_atomic(&o.output, &png)?;
+    if let (Some(path), Some(bytes)) = (&o.exr, exr) {
+        write_atomic(path, &bytes)?;
+    }
+    if !o.quiet {
+        println!("{}", summary(&renderer, &image));
+    }
+    Ok(image)
+}
+
+/// A short report of a render: size, time, work per pixel, the table.
+pub fn summary(renderer: &Renderer, image: &Rendered) -> String {
+    let s = &image.stats;
+    let pixels = (image.width as f64) * (image.height as f64);
+    let per = |n: u64| n as f64 / pixels;
+    let mut out = format!(
+        "{}: {}×{} px, {} spp, {} rays{}, tracer {}: {:.3} s (+ {:.3} s setup)\n\
+         per pixel: {:.1} distance queries, {:.1} SDF evaluations, {:.1} RK4 steps, {:.1} shadow SDF evaluations",
+        renderer.scene.name,
+        image.width,
+        image.height,
+        renderer.samples,
+        if renderer.air.is_straight() {
+            "straight"
+        } else {
+            "curved"
+        },
+        if renderer.air.is_stratified() {
+            " (stratified air)"
+        } else {
+            " (air with hot spots)"
+        },
+        renderer.options.tracer.name(),
+        s.trace_seconds,
+        s.table_seconds + s.grid_seconds,
+        per(s.march.counters.queries),
+        per(s.march.counters.object_evaluations),
+        per(s.march.rk4_steps),
+        per(s.shadow.object_evaluations),
+    );
+    if let Some(t) = &s.table {
+        out.push_str(&format!(
+            "\npath table: {} paths, {} RK4 steps, built in {:.3} s; interpolation error ≤ {:.4} px (estimated); {} of {} samples on the table",
+            t.paths,
+            t.rk4_steps,
+            s.table_seconds,
+            t.error_estimate / renderer.camera.pixel_angle(),
+            s.table_samples,
+            s.samples
+        ));
+    }
+    out
+}

@@ -1,0 +1,655 @@
+//! Path reuse for stratified air.
+//!
+//! When δ depends on the height alone, a ray from the camera stays in the
+//! vertical plane of its launch direction, its horizontal speed `c = n₀·cos θ₀`
+//! is constant in τ (so its horizontal distance is exactly `ρ = c·τ`), and its
+//! height `y(τ)` depends only on the launch elevation θ₀. One table of paths
+//! `y(τ; θ₀)` therefore serves every pixel: a ray between two tabulated
+//! elevations follows their linear interpolation, and sphere tracing walks along
+//! that closed-form curve with no medium evaluations at all.
+//!
+//! The table is refined until the interpolation is accurate: for each pair of
+//! neighbours the path at their mid-elevation is traced and compared with the
+//! interpolation, node by node, as an angle seen from the camera
+//! (|Δposition| / ρ); an interval is halved until that angle is below the
+//! tolerance (or the interval is tiny, which only happens across the folds of a
+//! mirage, where neighbouring rays part for good).
+
+use super::accel::Aabb;
+use super::air::Air;
+use crate::math::V3;
+use crate::trace::state::rate;
+use crate::trace::{RayState, rk4_step};
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+/// Paths that dive this far below the ground are stopped (and extended as
+/// straight lines): their ground crossing has long been found.
+const BELOW_STOP: f64 = 2.0;
+/// Paths that have escaped this far above everything are stopped likewise.
+const ABOVE_STOP: f64 = 50.0;
+
+/// One tabulated path.
+#[derive(Clone, Debug)]
+struct TablePath {
+    theta: f64,
+    /// Horizontal speed n₀ cos θ₀ (ρ = c·τ).
+    c: f64,
+    /// Height and vertical speed dy/dτ at τ = i·h.
+    nodes: Vec<[f64; 2]>,
+    /// Lower bound of the height over each interval (beyond the nodes: the
+    /// straight extension).
+    mins: Vec<f64>,
+    /// First interval whose lower bound is below the ground.
+    first_low: usize,
+    /// τ after which the path stays above every object, rising (∞: never).
+    tau_escape: f64,
+    /// τ at which the arc length reaches the scene's maximum distance.
+    tau_max: f64,
+    /// Elevation at the end (at the maximum distance, or when leaving the
+    /// top of the model after escaping).
+    final_elevation: f64,
+    /// Whether the path left for the sky (then its final elevation follows
+    /// from its invariant c alone).
+    escaped: bool,
+}
+
+impl TablePath {
+    /// Hermite data (y0, dy0, y1, dy1), slopes per unit τ, of interval i; past
+    /// the last node, the straight extension.
+    #[inline]
+    fn interval(&self, i: usize, h: f64) -> [f64; 4] {
+        let n = self.nodes.len();
+        if i + 1 < n {
+            let [y0, v0] = self.nodes[i];
+            let [y1, v1] = self.nodes[i + 1];
+            [y0, v0, y1, v1]
+        } else {
+            let [yl, vl] = self.nodes[n - 1];
+            let t0 = (i + 1 - n) as f64 * h;
+            [yl + vl * t0, vl, yl + vl * (t0 + h), vl]
+        }
+    }
+
+    #[inline]
+    fn interval_min(&self, i: usize, h: f64) -> f64 {
+        if i < self.mins.len() {
+            self.mins[i]
+        } else {
+            let [y0, _, y1, _] = self.interval(i, h);
+            y0.min(y1)
+        }
+    }
+
+    /// Height and dy/dτ at τ.
+    #[inline]
+    fn at(&self, tau: f64, h: f64) -> (f64, f64) {
+        let q = tau / h;
+        let i = q.floor().max(0.0) as usize;
+        let d = self.interval(i, h);
+        hermite(d, q - i as f64, h)
+    }
+}
+
+/// Cubic Hermite value and τ-derivative at θ ∈ [0, 1] of interval data
+/// (y0, dy0/dτ, y1, dy1/dτ) over a step h.
+#[inline]
+fn hermite([y0, v0, y1, v1]: [f64; 4], t: f64, h: f64) -> (f64, f64) {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    let y = (2.0 * t3 - 3.0 * t2 + 1.0) * y0
+        + (t3 - 2.0 * t2 + t) * h * v0
+        + (-2.0 * t3 + 3.0 * t2) * y1
+        + (t3 - t2) * h * v1;
+    let dy = ((6.0 * t2 - 6.0 * t) * y0
+        + (3.0 * t2 - 4.0 * t + 1.0) * h * v0
+        + (-6.0 * t2 + 6.0 * t) * y1
+        + (3.0 * t2 - 2.0 * t) * h * v1)
+        / h;
+    (y, dy)
+}
+
+/// The cubic's coefficients [a, b, c, d] (a t³ + b t² + c t + d) on θ ∈ [0, 1].
+fn cubic([y0, v0, y1, v1]: [f64; 4], h: f64) -> [f64; 4] {
+    let (m0, m1) = (h * v0, h * v1);
+    [
+        2.0 * y0 + m0 - 2.0 * y1 + m1,
+        -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1,
+        m0,
+        y0,
+    ]
+}
+
+fn eval_cubic([a, b, c, d]: [f64; 4], t: f64) -> f64 {
+    ((a * t + b) * t + c) * t + d
+}
+
+/// The critical points of the cubic inside (0, 1), ascending.
+fn critical_points([a, b, c, _]: [f64; 4]) -> ([f64; 2], usize) {
+    // 3a t² + 2b t + c = 0
+    let (qa, qb, qc) = (3.0 * a, 2.0 * b, c);
+    let mut out = [0.0; 2];
+    let mut n = 0;
+    let mut push = |t: f64| {
+        if t > 0.0 && t < 1.0 && n < 2 {
+            out[n] = t;
+            n += 1;
+        }
+    };
+    if qa.abs() < 1e-300 {
+        if qb != 0.0 {
+            push(-qc / qb);
+        }
+    } else {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc >= 0.0 {
+            let s = disc.sqrt();
+            // Numerically stable pair of roots.
+            let q = -0.5 * (qb + qb.signum() * s);
+            let (r1, r2) = if q != 0.0 {
+                (q / qa, qc / q)
+            } else {
+                (0.0, 0.0)
+            };
+            let (lo, hi) = if r1 <= r2 { (r1, r2) } else { (r2, r1) };
+            push(lo);
+            push(hi);
+        }
+    }
+    (out, n)
+}
+
+/// Lower bound (exact minimum) of the cubic over [0, 1].
+fn cubic_min(k: [f64; 4]) -> f64 {
+    let (cp, n) = critical_points(k);
+    let mut m = eval_cubic(k, 0.0).min(eval_cubic(k, 1.0));
+    for &t in &cp[..n] {
+        m = m.min(eval_cubic(k, t));
+    }
+    m
+}
+
+/// The first θ ∈ [0, 1] where the cubic (≥ 0 at 0) becomes negative.
+fn cubic_first_zero(k: [f64; 4]) -> Option<f64> {
+    let (cp, n) = critical_points(k);
+    let mut a = 0.0;
+    let mut stops = [1.0; 3];
+    stops[..n].copy_from_slice(&cp[..n]);
+    stops[n] = 1.0;
+    for &b in &stops[..=n] {
+        if eval_cubic(k, b) < 0.0 {
+            // Monotone on [a, b]: Newton kept inside the bracket.
+            let [c3, c2, c1, _] = k;
+            return Some(crate::trace::hermite::bracketed_root(a, b, |t| {
+                (eval_cubic(k, t), (3.0 * c3 * t + 2.0 * c2) * t + c1)
+            }));
+        }
+        a = b;
+    }
+    None
+}
+
+/// Statistics of a table.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TableStats {
+    /// Paths traced (kept and rejected midpoints alike: all are kept).
+    pub paths: usize,
+    /// RK4 steps over all paths.
+    pub rk4_steps: u64,
+    /// Largest interpolation error measured at a checked midpoint, as an angle
+    /// seen from the camera (radians), over the intervals finally kept (after
+    /// their halving: the measured value / 4, the interpolation error scaling
+    /// with the square of the interval).
+    pub error_estimate: f64,
+    /// Intervals that reached the smallest allowed width without meeting the
+    /// tolerance (folds of the mirage).
+    pub unresolved: usize,
+}
+
+/// Settings of a table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableSettings {
+    /// Lowest and highest launch elevation to cover (radians).
+    pub theta_range: (f64, f64),
+    /// Spacing of the first, uniform set of paths (radians).
+    pub initial_spacing: f64,
+    /// Smallest spacing refinement may reach (radians).
+    pub min_spacing: f64,
+    /// Largest interpolation error accepted, as an angle (radians).
+    pub tolerance: f64,
+    /// Arc length of one RK4 step (metres).
+    pub step: f64,
+    /// Arc length at which a ray ends in the sky (metres).
+    pub max_distance: f64,
+    /// Whether the ground plane y = 0 stops rays.
+    pub ground: bool,
+}
+
+/// The table of paths for one camera position.
+#[derive(Clone, Debug)]
+pub struct PathTable {
+    origin: DVec3,
+    h: f64,
+    n_max: f64,
+    paths: Vec<TablePath>,
+    thetas: Vec<f64>,
+    objects: Option<Aabb>,
+    /// Horizontal centre and radius of every object's bounding sphere.
+    footprints: Vec<(DVec2, f64)>,
+    ground: bool,
+    /// n at the top of the model, for the final direction of escaping rays.
+    n_top: f64,
+    stats: TableStats,
+}
+
+/// A camera ray's interpolated path: everything the sphere tracer needs.
+#[derive(Clone, Copy, Debug)]
+pub struct TableRay {
+    origin: DVec3,
+    /// Horizontal unit direction.
+    pub horizontal: DVec2,
+    /// Horizontal speed (ρ = c·τ).
+    pub c: f64,
+    k: usize,
+    w: f64,
+    h: f64,
+    /// τ after which no object can be met (left the objects' rectangle,
+    /// escaped above them, reached the ground or the maximum distance).
+    pub tau_objects_end: f64,
+    /// τ of the first ground crossing (∞: none before the maximum distance).
+    pub tau_ground: f64,
+    /// τ at the maximum distance.
+    pub tau_max: f64,
+    /// Elevation of the final direction (radians), for rays ending in the sky.
+    pub final_elevation: f64,
+    /// The τ intervals in which the ray is over some object's footprint (the
+    /// horizontal disc of its bounding sphere), sorted and merged: outside
+    /// them nothing can be hit. Exact, since the ray's horizontal track is a
+    /// straight line in stratified air.
+    windows: [(f64, f64); MAX_WINDOWS],
+    n_windows: usize,
+}
+
+/// Most footprint windows kept per ray; beyond, they merge into one.
+const MAX_WINDOWS: usize = 8;
+
+impl TableRay {
+    /// The start of the first window that ends after τ (τ itself if inside
+    /// one), or `None` when no window is left.
+    #[inline]
+    pub fn next_window(&self, tau: f64) -> Option<f64> {
+        self.windows[..self.n_windows]
+            .iter()
+            .find(|w| w.1 > tau)
+            .map(|w| w.0.max(tau))
+    }
+}
+
+impl PathTable {
+    /// Traces and refines the table for a camera at `origin` in the stratified
+    /// `air`. `objects`: the box of the objects (their top decides escapes).
+    pub fn build(
+        air: &Air,
+        origin: DVec3,
+        objects: &[crate::scene::sdf::SceneObject],
+        s: &TableSettings,
+    ) -> PathTable {
+        let footprints: Vec<(DVec2, f64)> = objects
+            .iter()
+            .map(|o| {
+                let (c, r) = o.shape.bounding_sphere();
+                (DVec2::new(c.x, c.z), r)
+            })
+            .collect();
+        let objects = Aabb::of_objects(objects);
+        let y_top = objects.map_or(origin.y, |b| b.max.y.max(origin.y));
+        let h = s.step / (air.n_max() * (1.0 + 1e-9));
+        let (lo, hi) = s.theta_range;
+        let n0 = ((hi - lo) / s.initial_spacing).ceil().max(1.0) as usize;
+        let mut thetas: Vec<f64> = (0..=n0)
+            .map(|i| lo + (hi - lo) * i as f64 / n0 as f64)
+            .collect();
+        let trace = |theta: f64| trace_path(air, origin, theta, h, s.max_distance, y_top);
+        let mut paths: Vec<TablePath> = thetas.par_iter().map(|&t| trace(t)).collect();
+        let mut stats = TableStats {
+            paths: paths.len(),
+            ..Default::default()
+        };
+        // Intervals still to check, by their left index in `paths`.
+        let mut open: Vec<bool> = vec![true; paths.len() - 1];
+        loop {
+            let todo: Vec<usize> = (0..open.len())
+                .filter(|&i| open[i] && thetas[i + 1] - thetas[i] > s.min_spacing)
+                .collect();
+            for i in 0..open.len() {
+                if open[i] && thetas[i + 1] - thetas[i] <= s.min_spacing {
+                    open[i] = false;
+                    stats.unresolved += 1;
+                }
+            }
+            if todo.is_empty() {
+                break;
+            }
+            let mids: Vec<(usize, TablePath, f64)> = todo
+                .par_iter()
+                .map(|&i| {
+                    let m = trace(0.5 * (thetas[i] + thetas[i + 1]));
+                    let e = midpoint_error(&paths[i], &paths[i + 1], &m, h);
+                    (i, m, e)
+                })
+                .collect();
+            stats.paths += mids.len();
+            // Insert from the right so that earlier indices stay valid.
+            for (i, m, e) in mids.into_iter().rev() {
+                let ok = e <= s.tolerance;
+                if ok {
+                    stats.error_estimate = stats.error_estimate.max(0.25 * e);
+                }
+                thetas.insert(i + 1, m.theta);
+                paths.insert(i + 1, m);
+                open[i] = !ok;
+                open.insert(i + 1, !ok);
+            }
+        }
+        stats.rk4_steps = paths.iter().map(|p| p.nodes.len() as u64 - 1).sum();
+        PathTable {
+            origin,
+            h,
+            n_max: air.n_max() * (1.0 + 1e-9),
+            paths,
+            thetas,
+            objects,
+            footprints,
+            ground: s.ground,
+            n_top: 1.0 + air.stratified_delta(air.profile_top()),
+            stats,
+        }
+    }
+
+    /// The table's statistics.
+    pub fn stats(&self) -> TableStats {
+        self.stats
+    }
+
+    /// Number of paths.
+    pub fn len(&self) -> usize {
+        self.paths.len()
+    }
+
+    /// Whether the table has no paths (never, once built).
+    pub fn is_empty(&self) -> bool {
+        self.paths.is_empty()
+    }
+
+    /// The RK4 step in τ of every path (nodes lie at τ = i·step).
+    pub fn step(&self) -> f64 {
+        self.h
+    }
+
+    /// Upper bound of the speed |dx/dτ| of every path (n_max).
+    pub fn n_max(&self) -> f64 {
+        self.n_max
+    }
+
+    /// The interpolated path of the camera ray along the unit direction `dir`,
+    /// or `None` if its elevation is outside the table (or it is vertical).
+    pub fn ray(&self, dir: DVec3) -> Option<TableRay> {
+        let hl = DVec2::new(dir.x, dir.z).length();
+        if hl == 0.0 {
+            return None;
+        }
+        let theta = dir.y.atan2(hl);
+        let (first, last) = (self.thetas[0], self.thetas[self.thetas.len() - 1]);
+        if !(theta >= first && theta <= last) {
+            return None;
+        }
+        let k = self
+            .thetas
+            .partition_point(|&t| t <= theta)
+            .clamp(1, self.thetas.len() - 1)
+            - 1;
+        let (a, b) = (&self.paths[k], &self.paths[k + 1]);
+        let w = (b.theta - theta) / (b.theta - a.theta);
+        let horizontal = DVec2::new(dir.x, dir.z) / hl;
+        let c = w * a.c + (1.0 - w) * b.c;
+        let tau_max = w * a.tau_max + (1.0 - w) * b.tau_max;
+        let mut ray = TableRay {
+            origin: self.origin,
+            horizontal,
+            c,
+            k,
+            w,
+            h: self.h,
+            tau_objects_end: tau_max,
+            tau_ground: f64::INFINITY,
+            tau_max,
+            final_elevation: w * a.final_elevation + (1.0 - w) * b.final_elevation,
+            windows: [(0.0, 0.0); MAX_WINDOWS],
+            n_windows: 0,
+        };
+        if self.ground {
+            ray.tau_ground = self.ground_tau(&ray);
+        }
+        if a.escaped && b.escaped {
+            // Snell with the ray's own invariant: exact, where interpolating
+            // the neighbours' final elevations is not (near the edge of a
+            // duct they change like a square root).
+            ray.final_elevation = (c / self.n_top).clamp(-1.0, 1.0).acos();
+        }
+        let tau_escape = a.tau_escape.max(b.tau_escape);
+        let tau_rect = match &self.objects {
+            None => 0.0,
+            Some(bx) => {
+                let rho = bx.xz_exit(DVec2::new(self.origin.x, self.origin.z), horizontal);
+                if c > 0.0 { rho / c } else { f64::INFINITY }
+            }
+        };
+        ray.tau_objects_end = tau_max.min(ray.tau_ground).min(tau_escape).min(tau_rect);
+        self.footprint_windows(&mut ray);
+        Some(ray)
+    }
+
+    fn footprint_windows(&self, r: &mut TableRay) {
+        let end = r.tau_objects_end;
+        let o = DVec2::new(self.origin.x, self.origin.z);
+        let mut buf = [(0.0, 0.0); 64];
+        let mut n = 0;
+        let mut overflow = false;
+        for &(c, radius) in &self.footprints {
+            let rel = c - o;
+            let t = rel.dot(r.horizontal);
+            let d2 = rel.length_squared() - t * t;
+            let r2 = radius * radius;
+            if d2 > r2 {
+                continue;
+            }
+            let half = (r2 - d2).sqrt();
+            // A hair wider, against rounding in ρ = c·τ.
+            let pad = 1e-9 * (t.abs() + radius) + 1e-9;
+            let (a, b) = ((t - half - pad) / r.c, (t + half + pad) / r.c);
+            let (a, b) = (a.max(0.0), b.min(end));
+            if a >= b {
+                continue;
+            }
+            if n == buf.len() {
+                overflow = true;
+                break;
+            }
+            buf[n] = (a, b);
+            n += 1;
+        }
+        if overflow {
+            r.windows[0] = (0.0, end);
+            r.n_windows = 1;
+            return;
+        }
+        let buf = &mut buf[..n];
+        buf.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut k = 0;
+        for &(a, b) in buf.iter() {
+            if k > 0 && a <= r.windows[k - 1].1 {
+                r.windows[k - 1].1 = r.windows[k - 1].1.max(b);
+            } else if k < MAX_WINDOWS {
+                r.windows[k] = (a, b);
+                k += 1;
+            } else {
+                r.windows[k - 1].1 = r.windows[k - 1].1.max(b);
+            }
+        }
+        r.n_windows = k;
+    }
+
+    /// First τ where the interpolated height goes below 0 (∞ if none before
+    /// the maximum distance).
+    fn ground_tau(&self, r: &TableRay) -> f64 {
+        let (a, b) = (&self.paths[r.k], &self.paths[r.k + 1]);
+        let w = r.w;
+        let h = self.h;
+        // Past both paths' last nodes the interpolation is a straight line.
+        let last = a.nodes.len().max(b.nodes.len()) - 1;
+        let mut i = a.first_low.min(b.first_low);
+        while i < last && (i as f64) * h < r.tau_max {
+            let lb = w * a.interval_min(i, h) + (1.0 - w) * b.interval_min(i, h);
+            if lb < 0.0 {
+                let (da, db) = (a.interval(i, h), b.interval(i, h));
+                let d = [0, 1, 2, 3].map(|j| w * da[j] + (1.0 - w) * db[j]);
+                if let Some(t) = cubic_first_zero(cubic(d, h)) {
+                    let tau = (i as f64 + t) * h;
+                    return if tau <= r.tau_max { tau } else { f64::INFINITY };
+                }
+            }
+            i += 1;
+        }
+        let (da, db) = (a.interval(last, h), b.interval(last, h));
+        let (y, v) = (w * da[0] + (1.0 - w) * db[0], w * da[1] + (1.0 - w) * db[1]);
+        let t0 = last as f64 * h;
+        if y < 0.0 {
+            return t0;
+        }
+        if v < 0.0 {
+            let tau = t0 - y / v;
+            if tau <= r.tau_max {
+                return tau;
+            }
+        }
+        f64::INFINITY
+    }
+
+    /// Position and unit tangent of the interpolated path at τ.
+    #[inline]
+    pub fn position(&self, r: &TableRay, tau: f64) -> (DVec3, DVec3) {
+        let (a, b) = (&self.paths[r.k], &self.paths[r.k + 1]);
+        let (ya, va) = a.at(tau, r.h);
+        let (yb, vb) = b.at(tau, r.h);
+        let y = r.w * ya + (1.0 - r.w) * yb;
+        let vy = r.w * va + (1.0 - r.w) * vb;
+        let rho = r.c * tau;
+        let p = DVec3::new(
+            r.origin.x + r.horizontal.x * rho,
+            y,
+            r.origin.z + r.horizontal.y * rho,
+        );
+        let t = DVec3::new(r.horizontal.x * r.c, vy, r.horizontal.y * r.c).normalize();
+        (p, t)
+    }
+}
+
+/// Traces the path launched at elevation `theta` from `origin` (in the vertical
+/// plane; only the height matters in stratified air).
+fn trace_path(
+    air: &Air,
+    origin: DVec3,
+    theta: f64,
+    h: f64,
+    max_distance: f64,
+    y_top: f64,
+) -> TablePath {
+    let field = air.field();
+    let mut evals = 0u64;
+    let x0 = V3::new(0.0, origin.y, 0.0);
+    let n0 = 1.0 + crate::medium::IndexField::delta(field, x0);
+    let mut y = RayState {
+        x: x0,
+        v: V3::new(theta.cos(), theta.sin(), 0.0) * n0,
+        s: 0.0,
+    };
+    let c = y.v.x;
+    let mut f = rate(field, &y, &mut evals);
+    let mut nodes = vec![[y.x.y, y.v.y]];
+    let mut tau_escape = f64::INFINITY;
+    let mut tau = 0.0;
+    let (tau_max, final_elevation) = loop {
+        let (y1, f1) = rk4_step(field, &y, &f, h, &mut evals);
+        tau += h;
+        nodes.push([y1.x.y, y1.v.y]);
+        let rising = y1.v.y > 0.0;
+        if tau_escape.is_infinite() && rising && y1.x.y > y_top && air.escapes(y1.x.y, c) {
+            tau_escape = tau;
+        }
+        if y1.s >= max_distance {
+            // Where, inside this step, the arc length reached the maximum.
+            let frac = (max_distance - y.s) / (y1.s - y.s);
+            break (tau - h + frac * h, y1.v.y.atan2(c));
+        }
+        let stop_below = y1.x.y < -BELOW_STOP && !rising;
+        let stop_above = tau_escape.is_finite() && y1.x.y > y_top + ABOVE_STOP;
+        if stop_below || stop_above {
+            let n1 = y1.v.norm();
+            let elevation = if stop_above {
+                air.asymptotic_elevation(c)
+            } else {
+                y1.v.y.atan2(c)
+            };
+            break (tau + (max_distance - y1.s) / n1, elevation);
+        }
+        y = y1;
+        f = f1;
+    };
+    let mut mins = Vec::with_capacity(nodes.len());
+    let mut first_low = nodes.len() - 1;
+    for i in 0..nodes.len() - 1 {
+        let d = [nodes[i][0], nodes[i][1], nodes[i + 1][0], nodes[i + 1][1]];
+        let m = cubic_min(cubic(d, h));
+        if m < 0.0 && first_low == nodes.len() - 1 {
+            first_low = i;
+        }
+        mins.push(m);
+    }
+    TablePath {
+        theta,
+        c,
+        nodes,
+        mins,
+        first_low,
+        tau_escape,
+        tau_max,
+        final_elevation,
+        escaped: tau_escape.is_finite(),
+    }
+}
+
+/// The largest angle (seen from the camera) between the path `m` and the
+/// average of its neighbours `a` and `b`, over the nodes that matter: until all
+/// three are below the ground or have escaped.
+fn midpoint_error(a: &TablePath, b: &TablePath, m: &TablePath, h: f64) -> f64 {
+    let len = a.nodes.len().max(b.nodes.len()).max(m.nodes.len());
+    let c_avg = 0.5 * (a.c + b.c);
+    let mut worst = 0.0f64;
+    for i in 1..len {
+        let tau = i as f64 * h;
+        let (ya, _) = a.at(tau, h);
+        let (yb, _) = b.at(tau, h);
+        let (ym, _) = m.at(tau, h);
+        if ya < 0.0 && yb < 0.0 && ym < 0.0 {
+            break;
+        }
+        if tau > a.tau_escape && tau > b.tau_escape && tau > m.tau_escape {
+            break;
+        }
+        let dy = ym - 0.5 * (ya + yb);
+        let drho = (m.c - c_avg) * tau;
+        let rho = (m.c * tau).max(1e-9);
+        worst = worst.max(dy.hypot(drho) / rho);
+    }
+    worst
+}

@@ -1,0 +1,592 @@
+//! Scene files: what the renderer looks at, from where, through which air.
+//!
+//! ```json
+//! {
+//!   "name": "hot-road",
+//!   "description": "Cars on a hot road, seen from a driver's seat.",
+//!   "camera": { "position": [0, 1.2, 0], "look_at": [0, 1.0, 300],
+//!               "up": [0, 1, 0], "vertical_fov": 1.2, "width": 1280, "height": 720 },
+//!   "medium": { "scale": 0.02, "background": { "n": 1.0, "a": 150.0 } },
+//!   "ground": { "checker": { "size": 2.0, "colors": [[0.08, 0.08, 0.09], [0.12, 0.12, 0.13]] } },
+//!   "sun": { "elevation": 35, "azimuth": 150 },
+//!   "sky": { "type": "gradient", "zenith": [0.25, 0.45, 0.9], "horizon": [0.8, 0.87, 0.95] },
+//!   "objects": [ { "name": "pole", "albedo": [0.7, 0.7, 0.7],
+//!                  "shape": { "type": "cylinder", "center": [3, 3, 280], "radius": 0.06, "half_height": 3 } } ],
+//!   "samples_per_pixel": 1,
+//!   "trace": { "step": 4.0, "max_distance": 3000 }
+//! }
+//! ```
+//!
+//! | field | meaning |
+//! | --- | --- |
+//! | `camera` | pinhole camera: `position`, `look_at` (metres), `up` (default `[0, 1, 0]`), `vertical_fov` (degrees, any value in (0, 179]; telephoto fractions of a degree are fine), `width`, `height` (pixels) |
+//! | `medium` | the air, inline ([`LogisticMedium`], as in problem files) |
+//! | `medium_from` | instead of `medium`: a JSON file (path relative to the scene file) whose `medium` field is read, e.g. the result of `mirage fit`, or a problem file (its starting air) |
+//! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
+//! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
+//! | `sun` | `elevation`, `azimuth` (degrees; azimuth from +z toward +x), `irradiance` (default 3.5, linear units), `color` (default white) |
+//! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional) |
+//! | `samples_per_pixel` | default 1 (the pixel centre); more: a low-discrepancy pattern inside the pixel |
+//! | `trace` | `step`: the RK4 step (metres, default 4), `max_distance`: the arc length after which a ray sees the sky along its final direction (metres, default 20000) |
+//!
+//! Exactly one of `medium` and `medium_from` is given; unknown fields anywhere are
+//! errors, and every error names the file and the field.
+
+use super::sdf::{SceneObject, validate_objects};
+use crate::error::{Error, Result};
+use crate::io::problem::parse_json;
+use crate::medium::LogisticMedium;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Default RK4 step of a scene (metres).
+pub const DEFAULT_STEP: f64 = 4.0;
+/// Default largest arc length of a camera ray (metres).
+pub const DEFAULT_MAX_DISTANCE: f64 = 20_000.0;
+/// Default sun irradiance (linear units: a white surface facing the sun has
+/// radiance `irradiance / π`).
+pub const DEFAULT_SUN_IRRADIANCE: f64 = 3.5;
+/// Largest image side accepted (pixels).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Largest number of samples per pixel accepted.
+pub const MAX_SAMPLES_PER_PIXEL: u32 = 4096;
+
+/// The `camera` section as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Eye position (metres).
+    pub position: [f64; 3],
+    /// A point the camera looks at (the image centre).
+    pub look_at: [f64; 3],
+    /// Up direction (default +y).
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    pub vertical_fov: f64,
+    /// Image width (pixels).
+    pub width: u32,
+    /// Image height (pixels).
+    pub height: u32,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+/// A checkerboard on the ground.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerSpec {
+    /// Side of one square (metres).
+    pub size: f64,
+    /// Albedo of the two kinds of squares (linear RGB, each in [0, 1]).
+    pub colors: [[f64; 3]; 2],
+}
+
+/// The `ground` section as written: exactly one of `albedo` and `checker`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundSpec {
+    /// Uniform albedo.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<[f64; 3]>,
+    /// Checkerboard albedo.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checker: Option<CheckerSpec>,
+}
+
+/// The `sun` section as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunSpec {
+    /// Elevation above the horizon (degrees, −90 … 90).
+    pub elevation: f64,
+    /// Azimuth (degrees), from +z toward +x.
+    pub azimuth: f64,
+    /// Irradiance on a surface facing the sun (linear units).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub irradiance: Option<f64>,
+    /// Colour (linear RGB, multiplies the irradiance; default white).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f64; 3]>,
+}
+
+impl Default for SunSpec {
+    fn default() -> Self {
+        SunSpec {
+            elevation: 40.0,
+            azimuth: 135.0,
+            irradiance: None,
+            color: None,
+        }
+    }
+}
+
+/// The `sky` section as written: a tagged model, so that a physical sky can be
+/// added as another `type` without touching existing files.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SkySpec {
+    /// Blend from `horizon` (elevation 0) to `zenith` (elevation 90°).
+    Gradient {
+        /// Radiance straight up (linear RGB, ≥ 0).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        zenith: Option<[f64; 3]>,
+        /// Radiance at the horizon (linear RGB, ≥ 0); also below it.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        horizon: Option<[f64; 3]>,
+    },
+}
+
+/// The `trace` section as written.
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneTraceSpec {
+    /// RK4 step (metres).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step: Option<f64>,
+    /// Largest arc length of a camera ray (metres).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_distance: Option<f64>,
+}
+
+/// A scene file exactly as written.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Short name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// What the picture shows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// The camera.
+    pub camera: CameraSpec,
+    /// The air, inline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub medium: Option<LogisticMedium>,
+    /// The air, read from another file's `medium` field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub medium_from: Option<PathBuf>,
+    /// The ground plane y = 0, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<GroundSpec>,
+    /// The objects.
+    #[serde(default)]
+    pub objects: Vec<SceneObject>,
+    /// The sun.
+    #[serde(default)]
+    pub sun: SunSpec,
+    /// The sky.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkySpec>,
+    /// Samples per pixel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples_per_pixel: Option<u32>,
+    /// Integration settings.
+    #[serde(default)]
+    pub trace: SceneTraceSpec,
+}
+
+/// A validated pinhole camera description.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSettings {
+    /// Eye position (metres).
+    pub position: DVec3,
+    /// Point at the image centre.
+    pub look_at: DVec3,
+    /// Up hint (not parallel to the view direction).
+    pub up: DVec3,
+    /// Vertical field of view (degrees).
+    pub vertical_fov: f64,
+    /// Width (pixels).
+    pub width: u32,
+    /// Height (pixels).
+    pub height: u32,
+}
+
+/// Albedo of the ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GroundAlbedo {
+    /// The same everywhere.
+    Uniform([f64; 3]),
+    /// Squares of side `size` alternating between two colours.
+    Checker {
+        /// Side (metres).
+        size: f64,
+        /// The two colours.
+        colors: [[f64; 3]; 2],
+    },
+}
+
+impl GroundAlbedo {
+    /// The albedo at the ground point (x, z).
+    #[inline]
+    pub fn at(&self, x: f64, z: f64) -> [f64; 3] {
+        match self {
+            GroundAlbedo::Uniform(a) => *a,
+            GroundAlbedo::Checker { size, colors } => {
+                let i = (x / size).floor() as i64 + (z / size).floor() as i64;
+                colors[i.rem_euclid(2) as usize]
+            }
+        }
+    }
+}
+
+/// The validated sun.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit vector toward the sun.
+    pub direction: DVec3,
+    /// Irradiance × colour (linear RGB).
+    pub irradiance: [f64; 3],
+}
+
+/// A validated scene: everything the renderer needs, nothing left to check.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Where it was read from (for messages; empty for scenes built in code).
+    pub source: PathBuf,
+    /// Files the scene read besides itself (`medium_from`), so that an output
+    /// never overwrites them.
+    pub inputs: Vec<PathBuf>,
+    /// Short name.
+    pub name: String,
+    /// What the picture shows.
+    pub description: String,
+    /// The camera.
+    pub camera: CameraSettings,
+    /// The air (valid per `model.md`).
+    pub medium: LogisticMedium,
+    /// The ground, if any.
+    pub ground: Option<GroundAlbedo>,
+    /// The objects (validated).
+    pub objects: Vec<SceneObject>,
+    /// The sun.
+    pub sun: Sun,
+    /// The sky model, as written (validated).
+    pub sky: SkySpec,
+    /// Samples per pixel (≥ 1).
+    pub samples_per_pixel: u32,
+    /// RK4 step (metres, > 0).
+    pub step: f64,
+    /// Largest arc length of a camera ray (metres, > 0).
+    pub max_distance: f64,
+}
+
+fn check_rgb(path: &Path, field: &str, c: [f64; 3], upper: Option<f64>) -> Result<()> {
+    for (i, v) in c.iter().enumerate() {
+        let bad = !v.is_finite() || *v < 0.0 || upper.is_some_and(|u| *v > u);
+        if bad {
+            let range = match upper {
+                Some(u) => format!("in [0, {u}]"),
+                None => "a finite number ≥ 0".to_string(),
+            };
+            return Err(Error::input(
+                path,
+                format!("{field}[{i}]"),
+                format!("must be {range}, got {v}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_finite3(path: &Path, field: &str, c: [f64; 3]) -> Result<DVec3> {
+    for (i, v) in c.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(Error::input(
+                path,
+                format!("{field}[{i}]"),
+                format!("must be a finite number, got {v}"),
+            ));
+        }
+    }
+    Ok(DVec3::from_array(c))
+}
+
+fn positive(path: &Path, field: &str, v: f64) -> Result<f64> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::input(
+            path,
+            field,
+            format!("must be a finite number > 0, got {v}"),
+        ))
+    }
+}
+
+impl CameraSettings {
+    /// Checks a camera section; errors name `camera.<field>` in `path`.
+    pub fn from_spec(spec: &CameraSpec, path: &Path) -> Result<CameraSettings> {
+        let position = check_finite3(path, "camera.position", spec.position)?;
+        let look_at = check_finite3(path, "camera.look_at", spec.look_at)?;
+        let up = check_finite3(path, "camera.up", spec.up)?;
+        let forward = look_at - position;
+        if forward.length() == 0.0 {
+            return Err(Error::input(
+                path,
+                "camera.look_at",
+                "must differ from camera.position (the view direction is undefined)",
+            ));
+        }
+        if up.length() == 0.0 {
+            return Err(Error::input(path, "camera.up", "must be a non-zero vector"));
+        }
+        let f = forward.normalize();
+        if f.cross(up.normalize()).length() < 1e-9 {
+            return Err(Error::input(
+                path,
+                "camera.up",
+                "must not be parallel to the view direction (look_at − position)",
+            ));
+        }
+        let fov = spec.vertical_fov;
+        if !(fov.is_finite() && fov > 0.0 && fov <= 179.0) {
+            return Err(Error::input(
+                path,
+                "camera.vertical_fov",
+                format!("must be in (0, 179] degrees, got {fov}"),
+            ));
+        }
+        for (field, v) in [("camera.width", spec.width), ("camera.height", spec.height)] {
+            if v == 0 || v > MAX_IMAGE_SIDE {
+                return Err(Error::input(
+                    path,
+                    field,
+                    format!("must be between 1 and {MAX_IMAGE_SIDE} pixels, got {v}"),
+                ));
+            }
+        }
+        Ok(CameraSettings {
+            position,
+            look_at,
+            up,
+            vertical_fov: fov,
+            width: spec.width,
+            height: spec.height,
+        })
+    }
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::input(path, "-", format!("cannot read the file: {e}")))?;
+        Scene::parse(&text, path)
+    }
+
+    /// Parses and validates the text of a scene file; `path` names it in
+    /// messages and anchors `medium_from`.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene> {
+        let file: SceneFile = parse_json(text, path, "scene")?;
+        Scene::from_file(file, path)
+    }
+
+    /// Validates a parsed scene file (reading `medium_from` if given).
+    pub fn from_file(file: SceneFile, path: &Path) -> Result<Scene> {
+        let camera = CameraSettings::from_spec(&file.camera, path)?;
+        let mut inputs = Vec::new();
+        let medium = match (file.medium, &file.medium_from) {
+            (Some(_), Some(_)) => {
+                return Err(Error::input(
+                    path,
+                    "medium_from",
+                    "give either `medium` or `medium_from`, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(Error::input(
+                    path,
+                    "medium",
+                    "missing: give the air inline (`medium`) or read it from a fit result (`medium_from`)",
+                ));
+            }
+            (Some(m), None) => {
+                m.validate()
+                    .map_err(|e| Error::input(path, format!("medium.{}", e.field), e.message))?;
+                m
+            }
+            (None, Some(from)) => {
+                let base = path.parent().unwrap_or(Path::new(""));
+                let resolved = base.join(from);
+                let m = medium_from_file(&resolved, path)?;
+                inputs.push(resolved);
+                m
+            }
+        };
+        let ground = match file.ground {
+            None => None,
+            Some(GroundSpec {
+                albedo: Some(_),
+                checker: Some(_),
+            }) => {
+                return Err(Error::input(
+                    path,
+                    "ground.checker",
+                    "give either `albedo` or `checker`, not both",
+                ));
+            }
+            Some(GroundSpec {
+                albedo: None,
+                checker: None,
+            }) => {
+                return Err(Error::input(
+                    path,
+                    "ground",
+                    "needs `albedo` ([r, g, b]) or `checker` ({ size, colors }); leave `ground` out for no ground",
+                ));
+            }
+            Some(GroundSpec {
+                albedo: Some(a),
+                checker: None,
+            }) => {
+                check_rgb(path, "ground.albedo", a, Some(1.0))?;
+                Some(GroundAlbedo::Uniform(a))
+            }
+            Some(GroundSpec {
+                albedo: None,
+                checker: Some(c),
+            }) => {
+                let size = positive(path, "ground.checker.size", c.size)?;
+                for (i, col) in c.colors.iter().enumerate() {
+                    check_rgb(
+                        path,
+                        &format!("ground.checker.colors[{i}]"),
+                        *col,
+                        Some(1.0),
+                    )?;
+                }
+                Some(GroundAlbedo::Checker {
+                    size,
+                    colors: c.colors,
+                })
+            }
+        };
+        validate_objects(&file.objects, "objects").map_err(|msg| {
+            // sdf.rs reports "path: message"; split it into the field and the text.
+            match msg.split_once(": ") {
+                Some((field, message)) => Error::input(path, field, message),
+                None => Error::input(path, "objects", msg),
+            }
+        })?;
+
+        let sun = {
+            let s = &file.sun;
+            if !(s.elevation.is_finite() && (-90.0..=90.0).contains(&s.elevation)) {
+                return Err(Error::input(
+                    path,
+                    "sun.elevation",
+                    format!("must be in [−90, 90] degrees, got {}", s.elevation),
+                ));
+            }
+            if !s.azimuth.is_finite() {
+                return Err(Error::input(
+                    path,
+                    "sun.azimuth",
+                    format!("must be a finite number of degrees, got {}", s.azimuth),
+                ));
+            }
+            let e = s.irradiance.unwrap_or(DEFAULT_SUN_IRRADIANCE);
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(Error::input(
+                    path,
+                    "sun.irradiance",
+                    format!("must be a finite number ≥ 0, got {e}"),
+                ));
+            }
+            let color = s.color.unwrap_or([1.0, 1.0, 1.0]);
+            check_rgb(path, "sun.color", color, None)?;
+            let (el, az) = (s.elevation.to_radians(), s.azimuth.to_radians());
+            Sun {
+                direction: DVec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos()),
+                irradiance: color.map(|c| c * e),
+            }
+        };
+        let sky = file.sky.unwrap_or(SkySpec::Gradient {
+            zenith: None,
+            horizon: None,
+        });
+        match &sky {
+            SkySpec::Gradient { zenith, horizon } => {
+                if let Some(z) = zenith {
+                    check_rgb(path, "sky.zenith", *z, None)?;
+                }
+                if let Some(h) = horizon {
+                    check_rgb(path, "sky.horizon", *h, None)?;
+                }
+            }
+        }
+        let samples_per_pixel = file.samples_per_pixel.unwrap_or(1);
+        if samples_per_pixel == 0 || samples_per_pixel > MAX_SAMPLES_PER_PIXEL {
+            return Err(Error::input(
+                path,
+                "samples_per_pixel",
+                format!("must be between 1 and {MAX_SAMPLES_PER_PIXEL}, got {samples_per_pixel}"),
+            ));
+        }
+        let step = positive(path, "trace.step", file.trace.step.unwrap_or(DEFAULT_STEP))?;
+        let max_distance = positive(
+            path,
+            "trace.max_distance",
+            file.trace.max_distance.unwrap_or(DEFAULT_MAX_DISTANCE),
+        )?;
+        let name = file.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        });
+        Ok(Scene {
+            source: path.to_path_buf(),
+            inputs,
+            name,
+            description: file.description.unwrap_or_default(),
+            camera,
+            medium,
+            ground,
+            objects: file.objects,
+            sun,
+            sky,
+            samples_per_pixel,
+            step,
+            max_distance,
+        })
+    }
+}
+
+/// Only the `medium` field of a result (or problem) file; every other field is
+/// ignored, since result files carry much more.
+#[derive(Deserialize)]
+struct MediumOnly {
+    medium: serde_json::Value,
+}
+
+/// Reads the `medium` field of `file`; errors name that file (and, when it
+/// cannot be read at all, the scene's `medium_from` field).
+fn medium_from_file(file: &Path, scene: &Path) -> Result<LogisticMedium> {
+    let text = std::fs::read_to_string(file).map_err(|e| {
+        Error::input(
+            scene,
+            "medium_from",
+            format!("cannot read `{}`: {e}", file.display()),
+        )
+    })?;
+    let holder: MediumOnly = parse_json(&text, file, "result")?;
+    let medium: LogisticMedium = serde_path_to_error::deserialize(holder.medium).map_err(|e| {
+        let field = e.path().to_string();
+        let field = if field == "." {
+            "medium".to_string()
+        } else {
+            format!("medium.{field}")
+        };
+        Error::input(file, field, e.into_inner().to_string())
+    })?;
+    medium
+        .validate()
+        .map_err(|e| Error::input(file, format!("medium.{}", e.field), e.message))?;
+    Ok(medium)
+}
