@@ -216,9 +216,7 @@ pub struct Problem {
 impl Problem {
     /// Reads and validates a problem file.
     pub fn load(path: &Path) -> Result<Problem> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::input(path, "-", format!("cannot read the file: {e}")))?;
-        Problem::parse(&text, path)
+        Problem::parse(&read_input(path)?, path)
     }
 
     /// Parses and validates the text of a problem file; `path` is only used in
@@ -435,6 +433,12 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         seed: spec.seed.unwrap_or(0x6d69_7261_6765),
         target_objective: tol("target_objective", spec.target_objective, 1e-12)?,
     })
+}
+
+/// Reads an input file; failure is an input error naming the file (exit 2).
+pub fn read_input(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path)
+        .map_err(|e| Error::input(path, "-", format!("cannot read the file: {e}")))
 }
 
 /// Parses JSON text into `T`, turning every failure into one message that names

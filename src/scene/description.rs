@@ -34,7 +34,7 @@
 
 use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
-use crate::io::problem::parse_json;
+use crate::io::problem::{parse_json, read_input};
 use crate::medium::LogisticMedium;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -375,9 +375,7 @@ impl CameraSettings {
 impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::input(path, "-", format!("cannot read the file: {e}")))?;
-        Scene::parse(&text, path)
+        Scene::parse(&read_input(path)?, path)
     }
 
     /// Parses and validates the text of a scene file; `path` names it in
