@@ -14,6 +14,36 @@ pub trait Sky: Sync {
     /// Mean radiance over the upper hemisphere, cosine-weighted: the ambient
     /// light on an upward-facing surface.
     fn ambient(&self) -> [f64; 3];
+
+    /// The smooth part of [`Sky::radiance`]: without the sun's disc and the
+    /// stars, so that it can be tabulated (the GPU previewer bakes it into a
+    /// texture and draws the disc and stars itself).
+    fn diffuse(&self, dir: DVec3) -> [f64; 3] {
+        self.radiance(dir)
+    }
+
+    /// The fraction of the sun's (top-of-atmosphere) irradiance that reaches
+    /// the ground, per channel: what lights the scene.
+    fn sun_transmittance(&self) -> [f64; 3] {
+        [1.0; 3]
+    }
+
+    /// The sun's disc as seen from the camera, if the model draws one.
+    fn sun_disc(&self) -> Option<SunDisc> {
+        None
+    }
+}
+
+/// The sun's disc in the sky: a uniform disc of `radiance` within
+/// `angular_radius` of `direction`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunDisc {
+    /// Unit direction toward the sun's centre.
+    pub direction: DVec3,
+    /// Angular radius (radians).
+    pub angular_radius: f64,
+    /// Linear RGB radiance of the disc as seen through the air.
+    pub radiance: [f64; 3],
 }
 
 /// A sky that blends from the horizon colour to the zenith colour with the
