@@ -14,6 +14,8 @@ pub mod math;
 pub mod medium;
 pub mod pair;
 pub mod plot;
+#[cfg(feature = "preview")]
+pub mod preview;
 pub mod render;
 pub mod scene;
 pub mod trace;

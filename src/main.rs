@@ -108,6 +108,39 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
+    #[cfg(feature = "preview")]
+    Preview {
+        /// Scene or problem file (JSON).
+        input: PathBuf,
+        /// No window: render one frame offscreen (to --output).
+        #[arg(long)]
+        headless: bool,
+        /// The headless frame (.png).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Frame width in pixels (default: the scene's, or the window's).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Frame height in pixels.
+        #[arg(long)]
+        height: Option<u32>,
+        /// Show the albedo of what each ray hits.
+        #[arg(long)]
+        albedo: bool,
+        /// Straight rays (δ ≡ 0), for comparison.
+        #[arg(long)]
+        straight: bool,
+        /// With --headless: print the time per frame (1280×720 unless sized).
+        #[arg(long)]
+        bench: bool,
+        /// Close the window after this many frames.
+        #[arg(long)]
+        frames: Option<u64>,
+        /// Save the window (frame and panels) here when it closes (.png).
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -177,6 +210,30 @@ fn main() -> ExitCode {
             quiet: *quiet,
         })
         .map(|_| ()),
+        #[cfg(feature = "preview")]
+        Command::Preview {
+            input,
+            headless,
+            output,
+            width,
+            height,
+            albedo,
+            straight,
+            bench,
+            frames,
+            screenshot,
+        } => mirage::preview::preview_command(&mirage::preview::PreviewOptions {
+            input: input.clone(),
+            headless: *headless,
+            output: output.clone(),
+            width: *width,
+            height: *height,
+            albedo: *albedo,
+            straight: *straight,
+            bench: *bench,
+            frames: *frames,
+            screenshot: screenshot.clone(),
+        }),
         Command::Tradeoff {
             problem,
             output,

@@ -370,6 +370,20 @@ impl Air {
         self.profile.top()
     }
 
+    /// The RK4 step inside the hot-spot zones and outside them (metres; see
+    /// [`Air::step_at`]), for the GPU previewer, which takes the same steps.
+    pub fn steps(&self) -> (f64, f64) {
+        (self.step_inside, self.step_outside)
+    }
+
+    /// The tabulated stratified profile, for the GPU previewer's Snell
+    /// decisions: the height spacing, the margin of the minima, and per height
+    /// δ, its minimum below and its minimum above.
+    pub fn profile_tables(&self) -> (f64, f64, &[f64], &[f64], &[f64]) {
+        let p = &self.profile;
+        (p.dy, p.margin, &p.delta, &p.prefix_min, &p.suffix_min)
+    }
+
     /// The fate of a ray at `p` with ray vector `v` (= n·t), if it is already
     /// decided: see the module documentation. `None`: keep integrating.
     pub fn fate(&self, p: DVec3, v: DVec3) -> Option<Fate> {

@@ -1,0 +1,471 @@
+//! The GPU: adapter and device setup, the tracing compute pipeline and its
+//! buffers, and headless frames read back to the CPU.
+//!
+//! Without a GPU, Mesa's software Vulkan (lavapipe, Debian
+//! `mesa-vulkan-drivers libvulkan1`) serves: wgpu picks it as a `Cpu` adapter.
+
+use super::scene_buffers::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers};
+use wgpu::util::DeviceExt;
+
+/// The tracing shader (WGSL).
+pub const TRACE_SHADER: &str = include_str!("trace.wgsl");
+/// Compute workgroup side (the shader's `@workgroup_size(8, 8)`).
+const WORKGROUP: u32 = 8;
+
+/// A device and its queue.
+pub struct Gpu {
+    /// The instance (kept for surfaces).
+    pub instance: wgpu::Instance,
+    /// The adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+}
+
+impl Gpu {
+    /// A device on the default adapter (a software one if that is all there
+    /// is); `Err` with the reason when there is none.
+    pub fn new() -> Result<Gpu, String> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Gpu::with_instance(instance, None)
+    }
+
+    /// A device on an adapter of `instance` that can present to `surface`.
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Gpu, String> {
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: surface,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| format!("no GPU adapter: {e}"))?;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("mirage preview"),
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| format!("cannot open the GPU device: {e}"))?;
+        Ok(Gpu {
+            instance,
+            adapter,
+            device,
+            queue,
+        })
+    }
+
+    /// The adapter's name and kind, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Cpu, Vulkan)`.
+    pub fn describe(&self) -> String {
+        let i = self.adapter.get_info();
+        format!("{} ({:?}, {:?})", i.name, i.device_type, i.backend)
+    }
+}
+
+/// The tracing pipeline with the scene's buffers and the output image.
+pub struct Tracer {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    hotspots: wgpu::Buffer,
+    objects: wgpu::Buffer,
+    nodes: wgpu::Buffer,
+    profile: wgpu::Buffer,
+    sky: wgpu::Texture,
+    output: wgpu::Texture,
+    bind_group: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn storage_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
+fn output_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("linear image"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+impl Tracer {
+    /// Compiles the shader and uploads `scene`.
+    pub fn new(gpu: &Gpu, scene: &SceneBuffers) -> Tracer {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trace.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(TRACE_SHADER.into()),
+        });
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=4).map(storage_entry));
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 5,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 6,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: wgpu::TextureFormat::Rgba32Float,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("trace bindings"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("trace layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("trace"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&scene.params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let sky = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("sky table"),
+            size: wgpu::Extent3d {
+                width: SKY_WIDTH,
+                height: SKY_HEIGHT,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let (width, height) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
+        let output = output_texture(device, width, height);
+        let hotspots = storage_buffer(device, "hot spots", bytemuck::cast_slice(&scene.hotspots));
+        let objects = storage_buffer(device, "objects", bytemuck::cast_slice(&scene.objects));
+        let nodes = storage_buffer(device, "nodes", bytemuck::cast_slice(&scene.nodes));
+        let profile = storage_buffer(device, "profile", bytemuck::cast_slice(&scene.profile));
+        let bind_group = Self::bind(
+            device, &layout, &params, &hotspots, &objects, &nodes, &profile, &sky, &output,
+        );
+        let tracer = Tracer {
+            pipeline,
+            layout,
+            params,
+            hotspots,
+            objects,
+            nodes,
+            profile,
+            sky,
+            output,
+            bind_group,
+            width,
+            height,
+        };
+        tracer.write_sky(gpu, scene);
+        tracer
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn bind(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        params: &wgpu::Buffer,
+        hotspots: &wgpu::Buffer,
+        objects: &wgpu::Buffer,
+        nodes: &wgpu::Buffer,
+        profile: &wgpu::Buffer,
+        sky: &wgpu::Texture,
+        output: &wgpu::Texture,
+    ) -> wgpu::BindGroup {
+        let sky_view = sky.create_view(&Default::default());
+        let out_view = output.create_view(&Default::default());
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trace bind group"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: hotspots.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: objects.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: nodes.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: profile.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&sky_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&out_view),
+                },
+            ],
+        })
+    }
+
+    fn write_sky(&self, gpu: &Gpu, scene: &SceneBuffers) {
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.sky,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&scene.sky),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16 * SKY_WIDTH),
+                rows_per_image: Some(SKY_HEIGHT),
+            },
+            wgpu::Extent3d {
+                width: SKY_WIDTH,
+                height: SKY_HEIGHT,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// Uploads a changed scene: the uniform block always, the storage buffers
+    /// (recreated when they grew), and the output image when the size changed.
+    pub fn update(&mut self, gpu: &Gpu, scene: &SceneBuffers) {
+        let device = &gpu.device;
+        let queue = &gpu.queue;
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&scene.params));
+        let mut rebind = false;
+        let mut put = |buf: &mut wgpu::Buffer, label: &str, bytes: &[u8]| {
+            if (bytes.len() as u64) <= buf.size() {
+                queue.write_buffer(buf, 0, bytes);
+            } else {
+                *buf = storage_buffer(device, label, bytes);
+                rebind = true;
+            }
+        };
+        put(
+            &mut self.hotspots,
+            "hot spots",
+            bytemuck::cast_slice(&scene.hotspots),
+        );
+        put(
+            &mut self.objects,
+            "objects",
+            bytemuck::cast_slice(&scene.objects),
+        );
+        put(&mut self.nodes, "nodes", bytemuck::cast_slice(&scene.nodes));
+        put(
+            &mut self.profile,
+            "profile",
+            bytemuck::cast_slice(&scene.profile),
+        );
+        let (w, h) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
+        if (w, h) != (self.width, self.height) {
+            self.output = output_texture(device, w, h);
+            self.width = w;
+            self.height = h;
+            rebind = true;
+        }
+        if rebind {
+            self.bind_group = Self::bind(
+                device,
+                &self.layout,
+                &self.params,
+                &self.hotspots,
+                &self.objects,
+                &self.nodes,
+                &self.profile,
+                &self.sky,
+                &self.output,
+            );
+        }
+    }
+
+    /// Uploads only the uniform block (camera moves, toggles).
+    pub fn update_params(&self, gpu: &Gpu, scene: &SceneBuffers) {
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&scene.params));
+    }
+
+    /// Records the tracing dispatch.
+    pub fn dispatch(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("trace"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(
+            self.width.div_ceil(WORKGROUP),
+            self.height.div_ceil(WORKGROUP),
+            1,
+        );
+    }
+
+    /// The linear image (what the display pass and read-back use).
+    pub fn output(&self) -> &wgpu::Texture {
+        &self.output
+    }
+
+    /// Traces one frame and waits for it.
+    pub fn render(&self, gpu: &Gpu) {
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        self.dispatch(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// Traces one frame and reads it back: linear RGB, row-major, top row first.
+    pub fn render_to_cpu(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, String> {
+        let (w, h) = (self.width, self.height);
+        let row = (16 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size: (row * h) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        self.dispatch(&mut encoder);
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.output,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        gpu.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| format!("GPU poll failed: {e}"))?;
+        rx.recv()
+            .map_err(|e| format!("GPU read-back failed: {e}"))?
+            .map_err(|e| format!("GPU read-back failed: {e}"))?;
+        let data = staging
+            .get_mapped_range(..)
+            .map_err(|e| format!("GPU read-back failed: {e}"))?;
+        let mut out = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            let line: &[f32] =
+                bytemuck::cast_slice(&data[(y * row) as usize..(y * row + 16 * w) as usize]);
+            for x in 0..w as usize {
+                out.push([line[4 * x], line[4 * x + 1], line[4 * x + 2]]);
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use wgpu::naga;
+
+    /// Parses and validates a WGSL source as wgpu will (no GPU needed).
+    fn validate(name: &str, source: &str) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    }
+
+    #[test]
+    fn the_shaders_are_valid_wgsl() {
+        validate("trace.wgsl", super::TRACE_SHADER);
+        validate("display.wgsl", crate::preview::window::DISPLAY_SHADER);
+    }
+}

@@ -1,0 +1,292 @@
+//! The GPU previewer: the CPU renderer's scene, medium, curved rays, sky and
+//! shading in a WGSL compute shader, shown live in a window with controls to
+//! edit the air, or rendered headless to a PNG.
+//!
+//! Data flow: a scene or problem file ([`Input`]) → [`scene_buffers::pack`]
+//! (f32 buffers, the medium in δ form) → [`gpu::Tracer`] (one compute
+//! dispatch per frame into a linear HDR image) → either read back and written
+//! like `mirage render`'s PNG (headless), or tone-mapped on the GPU and drawn
+//! under the egui panels ([`window`]).
+//!
+//! Not ported: the CPU renderer's path table for stratified air (the GPU
+//! integrates every ray; the table is an approximation of exactly that) and its
+//! distance grid (the GPU evaluates every object whose bounding sphere is
+//! nearer than the best distance so far).
+
+pub mod editing;
+pub mod gpu;
+pub mod scene_buffers;
+pub mod window;
+
+use crate::error::{Error, Result};
+use crate::io::problem::{parse_json, read_input};
+use crate::io::{Problem, check_not_input, write_atomic};
+use crate::medium::LogisticMedium;
+use crate::plot::ImageFormat;
+use crate::render::output::{ToneMap, encode_png};
+use crate::render::{RenderOptions, Shading};
+use crate::scene::Scene;
+use crate::scene::description::{CameraSpec, SceneFile};
+use gpu::{Gpu, Tracer};
+use scene_buffers::{View, pack};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Default size of a headless frame when the input does not fix one (a problem
+/// file) and for `--bench`.
+pub const BENCH_SIZE: (u32, u32) = (1280, 720);
+
+/// What the previewer shows: a scene, and for a problem file its pairs.
+#[derive(Clone, Debug)]
+pub struct Input {
+    /// The file given.
+    pub path: PathBuf,
+    /// The scene (for a problem: its medium over a plain ground, seen from
+    /// the first pair's origin).
+    pub scene: Scene,
+    /// The problem, when the input is one.
+    pub problem: Option<Problem>,
+}
+
+/// Reads a scene or a problem file (a scene has a `camera`, a problem `pairs`).
+pub fn load_input(path: &Path) -> Result<Input> {
+    let text = read_input(path)?;
+    let value: serde_json::Value = parse_json(&text, path, "scene or problem")?;
+    let is_scene = value.get("camera").is_some();
+    let is_problem = value.get("pairs").is_some();
+    match (is_scene, is_problem) {
+        (true, _) => Ok(Input {
+            path: path.to_path_buf(),
+            scene: Scene::parse(&text, path)?,
+            problem: None,
+        }),
+        (false, true) => {
+            let problem = Problem::parse(&text, path)?;
+            let scene = problem_scene(&problem, path)?;
+            Ok(Input {
+                path: path.to_path_buf(),
+                scene,
+                problem: Some(problem),
+            })
+        }
+        (false, false) => Err(Error::input(
+            path,
+            "-",
+            "neither a scene (no `camera`) nor a problem (no `pairs`)",
+        )),
+    }
+}
+
+/// The scene a problem is previewed in: its medium over a grey ground, seen
+/// from the first pair's origin toward its `through` point with a 2° field of
+/// view, and the sky behind.
+pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
+    let (position, look_at) = match problem.pairs.first() {
+        Some(p) => (p.origin, p.through),
+        None => ([0.0, 2.0, 0.0], [0.0, 2.0, 1000.0]),
+    };
+    let file = SceneFile {
+        name: Some(problem.name.clone()),
+        description: Some(problem.description.clone()),
+        camera: CameraSpec {
+            position,
+            look_at,
+            up: [0.0, 1.0, 0.0],
+            vertical_fov: 2.0,
+            width: BENCH_SIZE.0,
+            height: BENCH_SIZE.1,
+        },
+        medium: Some(problem.medium.clone()),
+        medium_from: None,
+        ground: Some(crate::scene::description::GroundSpec {
+            albedo: None,
+            checker: Some(crate::scene::description::CheckerSpec {
+                size: 10.0,
+                colors: [[0.10, 0.10, 0.10], [0.16, 0.15, 0.13]],
+            }),
+        }),
+        objects: Vec::new(),
+        sun: Default::default(),
+        sky: None,
+        samples_per_pixel: None,
+        trace: Default::default(),
+    };
+    Scene::from_file(file, path)
+}
+
+/// A GPU, or the error every command reports without one.
+pub fn open_gpu() -> Result<Gpu> {
+    Gpu::new().map_err(|e| {
+        Error::Failed(format!(
+            "{e} (without a GPU, install Mesa's software Vulkan: apt-get install mesa-vulkan-drivers libvulkan1)"
+        ))
+    })
+}
+
+/// Renders one frame of `scene` seen through `medium` on the GPU and reads it
+/// back: linear RGB, row-major, top row first.
+pub fn render_frame(
+    gpu: &Gpu,
+    scene: &Scene,
+    medium: &LogisticMedium,
+    view: &View,
+) -> Result<Vec<[f32; 3]>> {
+    let buffers =
+        pack(scene, medium, view).map_err(|m| Error::input(&scene.source, "objects", m))?;
+    let tracer = Tracer::new(gpu, &buffers);
+    tracer.render_to_cpu(gpu).map_err(Error::Failed)
+}
+
+/// The arguments of `mirage preview`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PreviewOptions {
+    /// Scene or problem file.
+    pub input: PathBuf,
+    /// No window: render one frame to `output`.
+    pub headless: bool,
+    /// The headless frame (.png, tone-mapped like `mirage render`'s).
+    pub output: Option<PathBuf>,
+    /// Frame width (pixels).
+    pub width: Option<u32>,
+    /// Frame height (pixels).
+    pub height: Option<u32>,
+    /// Albedo shading.
+    pub albedo: bool,
+    /// Straight rays.
+    pub straight: bool,
+    /// Headless: time frames and print ms/frame.
+    pub bench: bool,
+    /// Window: close after this many frames (for tests and screenshots).
+    pub frames: Option<u64>,
+    /// Window: save the last frame with its panels here (.png).
+    pub screenshot: Option<PathBuf>,
+}
+
+fn check_side(field: &str, v: Option<u32>) -> Result<Option<u32>> {
+    let cli = Path::new("<command line>");
+    match v {
+        Some(v) if v == 0 || v > crate::scene::description::MAX_IMAGE_SIDE => Err(Error::input(
+            cli,
+            field,
+            format!(
+                "must be between 1 and {} pixels, got {v}",
+                crate::scene::description::MAX_IMAGE_SIDE
+            ),
+        )),
+        v => Ok(v),
+    }
+}
+
+fn check_png(path: &Path, inputs: &[&Path]) -> Result<()> {
+    match ImageFormat::from_path(path)? {
+        ImageFormat::Png => {}
+        ImageFormat::Svg => {
+            return Err(Error::input(
+                path,
+                "-",
+                "previews are raster images: use a .png output",
+            ));
+        }
+    }
+    check_not_input(path, inputs)
+}
+
+/// The frame size for the options: both given, one given (the other from the
+/// scene's aspect ratio), or the scene's.
+fn frame_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let (w0, h0) = (scene.camera.width as f64, scene.camera.height as f64);
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, ((w as f64 * h0 / w0).round() as u32).max(1)),
+        (None, Some(h)) => (((h as f64 * w0 / h0).round() as u32).max(1), h),
+        (None, None) => (scene.camera.width, scene.camera.height),
+    }
+}
+
+/// `mirage preview`: the window, or with `headless` one frame to a PNG (and
+/// with `bench` the time per frame).
+pub fn preview_command(o: &PreviewOptions) -> Result<()> {
+    let cli = Path::new("<command line>");
+    let width = check_side("--width", o.width)?;
+    let height = check_side("--height", o.height)?;
+    let input = load_input(&o.input)?;
+    let mut inputs: Vec<&Path> = vec![o.input.as_path()];
+    inputs.extend(input.scene.inputs.iter().map(PathBuf::as_path));
+    if let Some(out) = &o.output {
+        check_png(out, &inputs)?;
+    }
+    if let Some(shot) = &o.screenshot {
+        check_png(shot, &inputs)?;
+    }
+    if !o.headless {
+        if o.output.is_some() || o.bench {
+            return Err(Error::input(
+                cli,
+                if o.bench { "--bench" } else { "--output" },
+                "only with --headless (the window saves with --screenshot)",
+            ));
+        }
+        return window::run(
+            input,
+            width,
+            height,
+            o.albedo,
+            o.straight,
+            o.frames,
+            o.screenshot.clone(),
+        );
+    }
+    if o.output.is_none() && !o.bench {
+        return Err(Error::input(
+            cli,
+            "--output",
+            "a headless preview needs an output image (-o frame.png) or --bench",
+        ));
+    }
+    let options = RenderOptions {
+        shading: if o.albedo {
+            Shading::Albedo
+        } else {
+            Shading::Lit
+        },
+        straight: o.straight,
+        ..RenderOptions::default()
+    };
+    let gpu = open_gpu()?;
+    let scene = &input.scene;
+    if o.bench {
+        let (w, h) = match (width, height) {
+            (None, None) => BENCH_SIZE,
+            _ => frame_size(scene, width, height),
+        };
+        let view = View::of_scene(scene, &options, w, h);
+        let buffers =
+            pack(scene, &scene.medium, &view).map_err(|m| Error::input(&o.input, "objects", m))?;
+        let tracer = Tracer::new(&gpu, &buffers);
+        tracer.render(&gpu);
+        let frames = 5;
+        let start = Instant::now();
+        for _ in 0..frames {
+            tracer.render(&gpu);
+        }
+        let ms = start.elapsed().as_secs_f64() * 1000.0 / frames as f64;
+        println!(
+            "{}: {w}×{h} px on {}: {ms:.1} ms/frame ({:.1} frames/s, mean of {frames})",
+            scene.name,
+            gpu.describe(),
+            1000.0 / ms
+        );
+    }
+    if let Some(out) = &o.output {
+        let (w, h) = frame_size(scene, width, height);
+        let view = View::of_scene(scene, &options, w, h);
+        let pixels = render_frame(&gpu, scene, &scene.medium, &view)?;
+        let tone = match options.shading {
+            Shading::Lit => ToneMap::Filmic { exposure: 1.0 },
+            Shading::Albedo => ToneMap::Clamp,
+        };
+        let png = encode_png(w, h, &pixels, tone)?;
+        write_atomic(out, &png)?;
+    }
+    Ok(())
+}

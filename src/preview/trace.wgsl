@@ -1,0 +1,583 @@
+// The previewer's ray tracer: the CPU renderer's algorithm (src/render/march.rs,
+// air.rs, mod.rs) in f32. One invocation per pixel writes linear RGB.
+//
+// The medium is evaluated in δ form (δ ≈ 1e-5 keeps 7 digits; 1 + δ would keep
+// three): dv/dτ = ∇δ + δ∇δ, and Snell's invariant is carried as c − 1, computed
+// from δ and the elevation, never as |v_h| − 1.
+
+struct Params {
+    origin: vec4<f32>,
+    forward: vec4<f32>,
+    right: vec4<f32>,
+    up: vec4<f32>,
+    size: vec4<u32>,
+    flags: vec4<u32>,
+    background: vec4<f32>,
+    inversion: vec4<f32>,
+    air: vec4<f32>,
+    profile: vec4<f32>,
+    tolerance: vec4<f32>,
+    ground0: vec4<f32>,
+    ground1: vec4<f32>,
+    box_min: vec4<f32>,
+    box_max: vec4<f32>,
+    sun_dir: vec4<f32>,
+    sun_irradiance: vec4<f32>,
+    ambient: vec4<f32>,
+    disc_dir: vec4<f32>,
+    disc_radiance: vec4<f32>,
+    counts: vec4<u32>,
+}
+
+struct HotSpot { a: vec4<f32>, b: vec4<f32>, c: vec4<f32> }
+struct Object { range: vec4<u32>, albedo: vec4<f32>, center: vec4<f32> }
+struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>, p0: vec4<f32>, p1: vec4<f32> }
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<storage, read> hotspots: array<HotSpot>;
+@group(0) @binding(2) var<storage, read> objects: array<Object>;
+@group(0) @binding(3) var<storage, read> nodes: array<Node>;
+@group(0) @binding(4) var<storage, read> profile: array<vec4<f32>>;
+@group(0) @binding(5) var sky: texture_2d<f32>;
+@group(0) @binding(6) var out_image: texture_storage_2d<rgba32float, write>;
+
+const PI: f32 = 3.14159265358979;
+const BIG: f32 = 1e30;
+const MAX_ITERATIONS: u32 = 20000u;
+
+// ---------------------------------------------------------------- the medium
+
+// σ(x) and σ'(x), exact at both tails.
+fn sigmoid(x: f32) -> vec2<f32> {
+    let e = exp(-abs(x));
+    let inv = 1.0 / (1.0 + e);
+    let s = select(e * inv, inv, x >= 0.0);
+    return vec2<f32>(s, e * inv * inv);
+}
+
+// (∇δ, δ) at p.
+fn medium(p: vec3<f32>) -> vec4<f32> {
+    var delta = 0.0;
+    var grad = vec3<f32>(0.0);
+    if (P.background.z > 0.5) {
+        let s = sigmoid(p.y * P.background.y);
+        delta += P.background.x * s.x;
+        grad.y += P.background.x * s.y * P.background.y;
+    }
+    if (P.inversion.w > 0.5) {
+        let s = sigmoid((P.inversion.z - p.y) * P.inversion.y);
+        delta += P.inversion.x * s.x;
+        grad.y -= P.inversion.x * s.y * P.inversion.y;
+    }
+    for (var j = 0u; j < P.size.z; j++) {
+        let h = hotspots[j];
+        let d = vec2<f32>(p.x - h.a.z, p.z - h.a.w);
+        let rho = length(d);
+        let sw = sigmoid(h.b.y * (h.b.x - rho));
+        var u = vec2<f32>(0.0);
+        if (rho > 0.0) { u = d / rho; }
+        let dw = -h.b.y * sw.y;
+        let s = sigmoid(p.y * h.a.y);
+        let amp_s = h.a.x * s.x;
+        delta += amp_s * sw.x;
+        grad.y += h.a.x * sw.x * s.y * h.a.y;
+        grad.x += amp_s * dw * u.x;
+        grad.z += amp_s * dw * u.y;
+    }
+    return vec4<f32>(grad, delta);
+}
+
+fn in_zone(p: vec3<f32>) -> bool {
+    for (var j = 0u; j < P.size.z; j++) {
+        let h = hotspots[j];
+        if (p.y < h.b.w && length(vec2<f32>(p.x - h.a.z, p.z - h.a.w)) < h.b.z) { return true; }
+    }
+    return false;
+}
+
+// The RK4 step (arc length) at p: Air::step_at.
+fn step_at(p: vec3<f32>) -> f32 {
+    var inside = BIG;
+    var approach = BIG;
+    for (var j = 0u; j < P.size.z; j++) {
+        let h = hotspots[j];
+        var growth = 1.0;
+        if (h.c.x > 0.0) { growth = exp(min(max(p.y, 0.0) / (4.0 * h.c.x), log(32.0))); }
+        let grown = P.air.y * growth;
+        let dh = max(length(vec2<f32>(p.x - h.a.z, p.z - h.a.w)) - h.b.z, 0.0);
+        let dv = max(p.y - h.b.w, 0.0);
+        let d = length(vec2<f32>(dh, dv));
+        if (d == 0.0) { inside = min(inside, grown); } else { approach = min(approach, max(grown, d)); }
+    }
+    return min(P.air.z, min(inside, approach));
+}
+
+// ------------------------------------------------------------ Snell decisions
+
+fn profile_index_floor(y: f32) -> u32 {
+    return min(u32(max(floor(y / P.profile.x), 0.0)), P.flags.w - 1u);
+}
+fn profile_index_ceil(y: f32) -> u32 {
+    return min(u32(max(ceil(y / P.profile.x), 0.0)), P.flags.w - 1u);
+}
+
+fn halfline_meets_disc(o: vec2<f32>, h: vec2<f32>, c: vec2<f32>, r: f32) -> bool {
+    let t = max(dot(c - o, h), 0.0);
+    return length(o + h * t - c) <= r;
+}
+
+fn halfline_meets_box_xz(o: vec2<f32>, h: vec2<f32>) -> bool {
+    let lo = P.box_min.xz;
+    let hi = P.box_max.xz;
+    var t0 = 0.0;
+    var t1 = BIG;
+    for (var k = 0; k < 2; k++) {
+        if (h[k] == 0.0) {
+            if (o[k] < lo[k] || o[k] > hi[k]) { return false; }
+        } else {
+            let a = (lo[k] - o[k]) / h[k];
+            let b = (hi[k] - o[k]) / h[k];
+            t0 = max(t0, min(a, b));
+            t1 = min(t1, max(a, b));
+        }
+    }
+    return t0 <= t1;
+}
+
+// Fate: 0 undecided, 1 sky (along `dir`), 2 bound for the ground.
+struct Fate { kind: u32, dir: vec3<f32> }
+
+fn fate(p: vec3<f32>, v: vec3<f32>) -> Fate {
+    var f = Fate(0u, vec3<f32>(0.0));
+    if (P.flags.y == 1u || p.y < 0.0 || v.y == 0.0 || in_zone(p)) { return f; }
+    let vn = normalize(v);
+    let se = vn.y;
+    let one_minus_cos = se * se / (1.0 + sqrt(max(1.0 - se * se, 0.0)));
+    let delta = medium(p).w;
+    // c − 1 with c = n·cos(elevation) = |v_h|.
+    let c1 = delta - (1.0 + delta) * one_minus_cos;
+    let rising = v.y > 0.0;
+    let escape = profile[profile_index_floor(p.y)].z - P.profile.y > c1;
+    var low = 0.0;
+    var high = BIG;
+    var ground_bound = false;
+    if (rising) {
+        if (!escape) { return f; }
+        low = p.y;
+    } else if (P.flags.z != 0u && profile[profile_index_ceil(p.y)].y - P.profile.y > c1) {
+        high = p.y;
+        ground_bound = true;
+    } else if (profile[profile_index_floor(p.y)].y < c1 && escape) {
+    } else {
+        return f;
+    }
+    let vh = vec2<f32>(vn.x, vn.z);
+    let lh = length(vh);
+    var h = vec2<f32>(0.0);
+    if (lh > 0.0) { h = vh / lh; }
+    let o = p.xz;
+    if (P.box_min.w > 0.5 && low <= P.box_max.y && high >= P.box_min.y && halfline_meets_box_xz(o, h)) {
+        return f;
+    }
+    for (var j = 0u; j < P.size.z; j++) {
+        let z = hotspots[j];
+        if (low < z.b.w && halfline_meets_disc(o, h, z.a.zw, z.b.z)) { return f; }
+    }
+    if (ground_bound) {
+        f.kind = 2u;
+        return f;
+    }
+    // Leaving the top of the model: n_top² − c² = (δ_top − c1)(2 + δ_top + c1).
+    let dt = P.profile.z;
+    let vy = sqrt(max((dt - c1) * (2.0 + dt + c1), 0.0));
+    f.kind = 1u;
+    f.dir = normalize(vec3<f32>(h.x * (1.0 + c1), vy, h.y * (1.0 + c1)));
+    return f;
+}
+
+// ---------------------------------------------------------------- the objects
+
+fn box_distance(d: vec3<f32>, h: vec3<f32>, shrink: f32) -> f32 {
+    let e = abs(d) - h + vec3<f32>(shrink);
+    return length(max(e, vec3<f32>(0.0))) + min(max(e.x, max(e.y, e.z)), 0.0) - shrink;
+}
+
+fn run_program(start: u32, count: u32, p: vec3<f32>) -> f32 {
+    var stack: array<f32, 16>;
+    var top = 0u;
+    for (var i = start; i < start + count; i++) {
+        let n = nodes[i];
+        let kind = n.kind.x;
+        if (kind < 10u) {
+            let q = vec3<f32>(dot(n.row0.xyz, p) + n.row0.w, dot(n.row1.xyz, p) + n.row1.w, dot(n.row2.xyz, p) + n.row2.w);
+            var d = 0.0;
+            switch kind {
+                case 1u: { d = length(q - n.p0.xyz) - n.p0.w; }
+                case 2u: { d = box_distance(q - n.p0.xyz, n.p1.xyz, 0.0); }
+                case 3u: { d = box_distance(q - n.p0.xyz, n.p1.xyz, n.p0.w); }
+                case 4u: { d = dot(n.p0.xyz, q) - n.p0.w; }
+                case 5u: {
+                    let e = q - n.p0.xyz;
+                    d = length(vec2<f32>(length(e.xz) - n.p1.x, e.y)) - n.p1.y;
+                }
+                case 6u: {
+                    let e = q - n.p0.xyz;
+                    let w = vec2<f32>(length(e.xz) - n.p1.x, abs(e.y) - n.p1.y);
+                    d = min(max(w.x, w.y), 0.0) + length(max(w, vec2<f32>(0.0)));
+                }
+                case 7u: {
+                    let pa = q - n.p0.xyz;
+                    let ba = n.p1.xyz - n.p0.xyz;
+                    let bb = dot(ba, ba);
+                    var t = 0.0;
+                    if (bb > 0.0) { t = clamp(dot(pa, ba) / bb, 0.0, 1.0); }
+                    d = length(pa - ba * t) - n.p0.w;
+                }
+                default: { d = BIG; }
+            }
+            stack[top] = d * n.p1.w;
+            top += 1u;
+        } else {
+            let b = stack[top - 1u];
+            let a = stack[top - 2u];
+            top -= 1u;
+            var r = 0.0;
+            switch kind {
+                case 10u: { r = min(a, b); }
+                case 11u: { r = max(a, b); }
+                case 12u: { r = max(a, -b); }
+                default: {
+                    let k = n.p0.x;
+                    let hh = max(k - abs(a - b), 0.0) / k;
+                    r = min(a, b) - hh * hh * k * 0.25;
+                }
+            }
+            stack[top - 1u] = r;
+        }
+    }
+    if (top == 0u) { return BIG; }
+    return stack[0];
+}
+
+// (distance, nearest object index as f32) over every object; objects whose
+// bounding sphere is farther than the best so far are skipped.
+fn scene_distance(p: vec3<f32>) -> vec2<f32> {
+    var best = BIG;
+    var index = 0u;
+    for (var i = 0u; i < P.size.w; i++) {
+        let o = objects[i];
+        if (o.albedo.w >= 0.0 && length(p - o.center.xyz) - o.albedo.w >= best) { continue; }
+        let d = run_program(o.range.x, o.range.y, p);
+        if (d < best) {
+            best = d;
+            index = i;
+        }
+    }
+    return vec2<f32>(best, f32(index));
+}
+
+fn object_distance(i: u32, p: vec3<f32>) -> f32 {
+    return run_program(objects[i].range.x, objects[i].range.y, p);
+}
+
+// ------------------------------------------------------------- the ray path
+
+struct Seg {
+    x0: vec3<f32>, v0: vec3<f32>, a0: vec3<f32>, s0: f32,
+    x1: vec3<f32>, v1: vec3<f32>, a1: vec3<f32>, s1: f32,
+    h: f32,
+}
+
+fn rate_dv(m: vec4<f32>) -> vec3<f32> {
+    // n∇n = ∇δ + δ∇δ
+    return m.xyz + m.w * m.xyz;
+}
+
+// Quintic Hermite position and its θ-derivative (trace/hermite.rs).
+fn hermite(s: Seg, t: f32) -> array<vec3<f32>, 2> {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    let t4 = t3 * t;
+    let t5 = t4 * t;
+    let h5 = 10.0 * t3 - 15.0 * t4 + 6.0 * t5;
+    let w0 = 1.0 - h5;
+    let w1 = t - 6.0 * t3 + 8.0 * t4 - 3.0 * t5;
+    let w2 = 0.5 * t2 - 1.5 * t3 + 1.5 * t4 - 0.5 * t5;
+    let w3 = 0.5 * t3 - t4 + 0.5 * t5;
+    let w4 = -4.0 * t3 + 7.0 * t4 - 3.0 * t5;
+    let d5 = 30.0 * t2 - 60.0 * t3 + 30.0 * t4;
+    let d1 = 1.0 - 18.0 * t2 + 32.0 * t3 - 15.0 * t4;
+    let d2 = t - 4.5 * t2 + 6.0 * t3 - 2.5 * t4;
+    let d3 = 1.5 * t2 - 4.0 * t3 + 2.5 * t4;
+    let d4 = -12.0 * t2 + 28.0 * t3 - 15.0 * t4;
+    let h = s.h;
+    let h2 = h * h;
+    // Relative to x0, so that f32 keeps the small displacement's digits.
+    let dx = s.x1 - s.x0;
+    let x = s.x0 + s.v0 * (h * w1) + s.a0 * (h2 * w2) + s.a1 * (h2 * w3) + s.v1 * (h * w4) + dx * h5;
+    let dxdt = s.v0 * (h * d1) + s.a0 * (h2 * d2) + s.a1 * (h2 * d3) + s.v1 * (h * d4) + dx * d5;
+    return array<vec3<f32>, 2>(x, dxdt);
+}
+
+// Cubic Hermite of v (trace/hermite.rs, `state`).
+fn hermite_v(s: Seg, t: f32) -> vec3<f32> {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    let h01 = 3.0 * t2 - 2.0 * t3;
+    return s.v0 * (1.0 - h01) + s.a0 * (s.h * (t - 2.0 * t2 + t3)) + s.v1 * h01 + s.a1 * (s.h * (t3 - t2));
+}
+
+// The root in [a, b] of the height, g(a) and g(b) of opposite signs.
+fn height_root(s: Seg, a0: f32, b0: f32) -> f32 {
+    var a = a0;
+    var b = b0;
+    let rising = hermite(s, a)[0].y < 0.0;
+    var t = 0.5 * (a + b);
+    for (var i = 0; i < 40; i++) {
+        let e = hermite(s, t);
+        let g = e[0].y;
+        if (g == 0.0) { return t; }
+        if ((g < 0.0) == rising) { a = t; } else { b = t; }
+        let newton = t - g / e[1].y;
+        var next = 0.5 * (a + b);
+        if (newton > a && newton < b) { next = newton; }
+        if (abs(next - t) <= 1e-7 || b - a <= 1e-7) { return next; }
+        t = next;
+    }
+    return t;
+}
+
+// The first θ where the step is below ground, or −1 (trace::first_ground_crossing).
+fn ground_crossing(s: Seg) -> f32 {
+    if (s.x0.y < 0.0) { return 0.0; }
+    if (s.x1.y < 0.0) { return height_root(s, 0.0, 1.0); }
+    if (s.v0.y < 0.0 && s.v1.y > 0.0) {
+        // The lowest point: where the slope changes sign.
+        var a = 0.0;
+        var b = 1.0;
+        for (var i = 0; i < 30; i++) {
+            let m = 0.5 * (a + b);
+            if (hermite(s, m)[1].y < 0.0) { a = m; } else { b = m; }
+        }
+        let lowest = 0.5 * (a + b);
+        if (hermite(s, lowest)[0].y < 0.0) { return height_root(s, 0.0, lowest); }
+    }
+    return -1.0;
+}
+
+fn rk4(x: vec3<f32>, v: vec3<f32>, a: vec3<f32>, s: f32, h: f32) -> Seg {
+    let m2 = medium(x + v * (0.5 * h));
+    let v2 = v + a * (0.5 * h);
+    let a2 = rate_dv(m2);
+    let m3 = medium(x + v2 * (0.5 * h));
+    let v3 = v + a2 * (0.5 * h);
+    let a3 = rate_dv(m3);
+    let m4 = medium(x + v3 * h);
+    let v4 = v + a3 * h;
+    let a4 = rate_dv(m4);
+    let m1 = medium(x);
+    let x1 = x + (v + 2.0 * v2 + 2.0 * v3 + v4) * (h / 6.0);
+    let v1 = v + (a + 2.0 * a2 + 2.0 * a3 + a4) * (h / 6.0);
+    let s1 = s + ((1.0 + m1.w) + 2.0 * (1.0 + m2.w) + 2.0 * (1.0 + m3.w) + (1.0 + m4.w)) * (h / 6.0);
+    let m5 = medium(x1);
+    return Seg(x, v, a, s, x1, v1, rate_dv(m5), s1, h);
+}
+
+// ------------------------------------------------------------------- the sky
+
+fn sky_texel(col: u32, row: u32) -> vec3<f32> {
+    return textureLoad(sky, vec2<i32>(i32(col % P.counts.x), i32(row)), 0).xyz;
+}
+
+fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
+    let d = normalize(dir);
+    let elevation = asin(clamp(d.y, -1.0, 1.0));
+    let v = sign(elevation) * sqrt(abs(elevation) / (0.5 * PI));
+    let fy = (v + 1.0) * 0.5 * f32(P.counts.y - 1u);
+    var az = atan2(d.x, d.z);
+    if (az < 0.0) { az += 2.0 * PI; }
+    let fx = az / (2.0 * PI) * f32(P.counts.x);
+    let y0 = min(u32(floor(fy)), P.counts.y - 2u);
+    let ty = clamp(fy - f32(y0), 0.0, 1.0);
+    let x0 = u32(floor(fx)) % P.counts.x;
+    let tx = fx - floor(fx);
+    let low = mix(sky_texel(x0, y0), sky_texel(x0 + 1u, y0), tx);
+    let high = mix(sky_texel(x0, y0 + 1u), sky_texel(x0 + 1u, y0 + 1u), tx);
+    var c = mix(low, high, ty);
+    if (P.disc_dir.w > 0.0 && dot(d, P.disc_dir.xyz) >= cos(P.disc_dir.w)) {
+        c += P.disc_radiance.xyz;
+    }
+    return c;
+}
+
+// -------------------------------------------------------------- the marching
+
+// Outcome: kind 0 sky (dir), 1 object (index, point, distance), 2 ground (point).
+struct Outcome { kind: u32, index: u32, point: vec3<f32>, dir: vec3<f32>, distance: f32 }
+
+fn tolerance(s: f32) -> f32 {
+    return max(P.tolerance.x, P.tolerance.y * s);
+}
+
+fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
+    let n_max = P.air.x * (1.0 + 1e-7);
+    let m0 = medium(origin);
+    var seg = Seg(origin, dir * (1.0 + m0.w), rate_dv(m0), 0.0, origin, dir * (1.0 + m0.w), rate_dv(m0), 0.0, 0.0);
+    var theta = 1.0;
+    var arc_per_theta = 0.0;
+    var ground_theta = -1.0;
+    var free = P.size.w == 0u;
+    var queries = 0u;
+    var budget = 0.0;
+    let max_distance = P.up.w;
+    for (var it = 0u; it < MAX_ITERATIONS; it++) {
+        if (!free && budget <= 0.0) {
+            var p = seg.x1;
+            var v = seg.v1;
+            if (seg.h > 0.0) {
+                let e = hermite(seg, theta);
+                p = e[0];
+                v = e[1] / seg.h;
+            }
+            let q = scene_distance(p);
+            queries += 1u;
+            let arc = seg.s0 + theta * (seg.s1 - seg.s0);
+            if (q.x < tolerance(arc) || queries >= P.counts.w) {
+                return Outcome(1u, u32(q.y), p, normalize(v), arc);
+            }
+            let f = fate(p, v);
+            if (f.kind == 1u) { return Outcome(0u, 0u, p, f.dir, arc); }
+            if (f.kind == 2u) {
+                free = true;
+                continue;
+            }
+            budget = q.x;
+        }
+        // Advance by at most `budget` of arc (unlimited when free).
+        if (theta >= 1.0) {
+            let h_arc = min(step_at(seg.x1), max_distance);
+            seg = rk4(seg.x1, seg.v1, seg.a1, seg.s1, h_arc / n_max);
+            theta = 0.0;
+            arc_per_theta = h_arc;
+            ground_theta = -1.0;
+            if (P.flags.z != 0u) { ground_theta = ground_crossing(seg); }
+        }
+        let room = (1.0 - theta) * arc_per_theta;
+        var go = room;
+        if (!free) { go = min(budget, room); }
+        var goal = 1.0;
+        if (go < room) { goal = theta + go / arc_per_theta; }
+        if (ground_theta >= 0.0 && ground_theta <= goal) {
+            let e = hermite(seg, ground_theta);
+            let point = vec3<f32>(e[0].x, 0.0, e[0].z);
+            let s = seg.s0 + ground_theta * (seg.s1 - seg.s0);
+            return Outcome(2u, 0u, point, normalize(hermite_v(seg, ground_theta)), s);
+        }
+        if (seg.s1 >= max_distance) {
+            let t_max = clamp((max_distance - seg.s0) / (seg.s1 - seg.s0), 0.0, 1.0);
+            if (t_max <= goal) {
+                return Outcome(0u, 0u, seg.x1, normalize(hermite_v(seg, t_max)), max_distance);
+            }
+        }
+        theta = goal;
+        budget -= go;
+    }
+    return Outcome(0u, 0u, seg.x1, normalize(seg.v1), max_distance);
+}
+
+// ------------------------------------------------------------------ shading
+
+fn ray_box(o: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
+    let inv = 1.0 / d;
+    let a = (P.box_min.xyz - o) * inv;
+    let b = (P.box_max.xyz - o) * inv;
+    let lo = min(a, b);
+    let hi = max(a, b);
+    let t0 = max(max(max(lo.x, lo.y), lo.z), 0.0);
+    let t1 = min(min(hi.x, hi.y), hi.z);
+    return vec2<f32>(t0, t1);
+}
+
+fn sunlit(p: vec3<f32>, d: vec3<f32>) -> bool {
+    if (P.box_min.w < 0.5) { return true; }
+    let span = ray_box(p, d);
+    if (!(span.x <= span.y)) { return true; }
+    var t = span.x;
+    for (var i = 0; i < 512; i++) {
+        let q = scene_distance(p + d * t).x;
+        if (q < 1e-4 + 1e-7 * t) { return false; }
+        t += q;
+        if (t > span.y) { return true; }
+    }
+    return true;
+}
+
+fn light(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
+    let sun = P.sun_dir.xyz;
+    let c = dot(n, sun);
+    var direct = 0.0;
+    if (c > 0.0 && sun.y > 0.0 && sunlit(p, sun)) { direct = c / PI; }
+    let hemi = 0.5 + 0.5 * n.y;
+    return albedo * (P.sun_irradiance.xyz * direct + P.ambient.xyz * hemi);
+}
+
+fn object_normal(i: u32, p: vec3<f32>) -> vec3<f32> {
+    // f32 needs a larger step than the CPU's 1e-7 relative one.
+    let h = max(1e-3, 4e-6 * max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    let g = vec3<f32>(
+        object_distance(i, p + vec3<f32>(h, 0.0, 0.0)) - object_distance(i, p - vec3<f32>(h, 0.0, 0.0)),
+        object_distance(i, p + vec3<f32>(0.0, h, 0.0)) - object_distance(i, p - vec3<f32>(0.0, h, 0.0)),
+        object_distance(i, p + vec3<f32>(0.0, 0.0, h)) - object_distance(i, p - vec3<f32>(0.0, 0.0, h)));
+    let l = length(g);
+    if (l == 0.0) { return vec3<f32>(0.0, 1.0, 0.0); }
+    return g / l;
+}
+
+fn ground_albedo(x: f32, z: f32) -> vec3<f32> {
+    if (P.flags.z == 2u) {
+        let i = i32(floor(x / P.ground0.w)) + i32(floor(z / P.ground0.w));
+        if ((i & 1) != 0) { return P.ground1.xyz; }
+    }
+    return P.ground0.xyz;
+}
+
+fn shade(o: Outcome) -> vec3<f32> {
+    let albedo_only = P.flags.x == 1u;
+    if (o.kind == 0u) { return sky_radiance(o.dir); }
+    if (o.kind == 1u) {
+        let albedo = objects[o.index].albedo.xyz;
+        if (albedo_only) { return albedo; }
+        let n = object_normal(o.index, o.point);
+        let eps = max(P.tolerance.x, P.tolerance.y * o.distance);
+        return light(o.point + n * (2.0 * eps + 1e-4), n, albedo);
+    }
+    let albedo = ground_albedo(o.point.x, o.point.z);
+    if (albedo_only) { return albedo; }
+    return light(o.point + vec3<f32>(0.0, 1e-3, 0.0), vec3<f32>(0.0, 1.0, 0.0), albedo);
+}
+
+// --------------------------------------------------------------- the camera
+
+fn sample_offset(i: u32) -> vec2<f32> {
+    let k = f32(i);
+    return vec2<f32>(fract(0.5 + 0.7548776662466927 * k), fract(0.5 + 0.5698402909980533 * k));
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = P.size.x;
+    let hgt = P.size.y;
+    if (id.x >= w || id.y >= hgt) { return; }
+    var sum = vec3<f32>(0.0);
+    let spp = P.counts.z;
+    for (var i = 0u; i < spp; i++) {
+        let off = sample_offset(i);
+        let px = f32(id.x) + off.x;
+        let py = f32(id.y) + off.y;
+        let sx = (2.0 * px / f32(w) - 1.0) * P.origin.w * P.forward.w;
+        let sy = (1.0 - 2.0 * py / f32(hgt)) * P.origin.w;
+        let dir = normalize(P.forward.xyz + P.right.xyz * sx + P.up.xyz * sy);
+        sum += shade(march(P.origin.xyz, dir));
+    }
+    textureStore(out_image, vec2<i32>(i32(id.x), i32(id.y)), vec4<f32>(sum / f32(spp), 1.0));
+}

@@ -1,0 +1,1094 @@
+//! The previewer window: winit + wgpu + egui. Every frame traces the view on
+//! the GPU ([`super::gpu::Tracer`]), shows it tone-mapped in the central
+//! area, and draws the controls beside it.
+//!
+//! - **Camera**: drag (left, or right in hot-spot mode) turns the view: in place
+//!   (fly) or around the point looked at (orbit); W/A/S/D/Q/E move (Shift:
+//!   ×10); the wheel zooms the field of view down to 0.01°. Turning follows the
+//!   pointer at any zoom (the angle per pixel is the pixel's angle).
+//! - **Editing** ([`super::editing`]): a slider per medium parameter, named by
+//!   its path; in hot-spot mode, dragging a hot spot on the ground moves it,
+//!   dragging its rim resizes it, double-clicking the ground adds one. The
+//!   problem's pairs are drawn (through: circle, target: cross) with their
+//!   current endpoint distances; "Fit" runs the fit from the current medium
+//!   in the background; "Save" writes the input with the edited medium,
+//!   atomically.
+//!
+//! Overlays (hot-spot rims, pair markers) are placed with straight rays: they
+//! mark where things are, the traced image shows where they appear.
+
+use super::Input;
+use super::editing::{self, Drag, FitJob};
+use super::gpu::{Gpu, Tracer};
+use super::scene_buffers::{SceneBuffers, View, pack};
+use crate::error::{Error, Result};
+use crate::io::write_atomic;
+use crate::medium::{LogisticMedium, Param};
+use crate::render::Shading;
+use crate::render::accel::Aabb;
+use crate::render::air::Air;
+use crate::render::camera::Camera;
+use crate::scene::description::CameraSettings;
+use glam::{DVec2, DVec3};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::window::{Window, WindowId};
+
+/// The display shader (WGSL).
+pub const DISPLAY_SHADER: &str = include_str!("display.wgsl");
+
+/// Narrowest field of view the wheel zooms to (degrees).
+pub const MIN_FOV: f64 = 0.01;
+/// Widest field of view (degrees).
+pub const MAX_FOV: f64 = 120.0;
+
+/// Where the camera is and how it turns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraState {
+    /// Eye position.
+    pub position: DVec3,
+    /// Heading (radians, from +z toward +x).
+    pub yaw: f64,
+    /// Elevation of the view direction (radians).
+    pub pitch: f64,
+    /// Vertical field of view (degrees).
+    pub fov: f64,
+    /// Distance to the point orbited.
+    pub distance: f64,
+    /// Orbit (true) or fly.
+    pub orbit: bool,
+}
+
+impl CameraState {
+    /// The state of a scene's camera.
+    pub fn from_settings(c: &CameraSettings) -> CameraState {
+        let d = c.look_at - c.position;
+        let f = d.normalize();
+        CameraState {
+            position: c.position,
+            yaw: f.x.atan2(f.z),
+            pitch: f.y.clamp(-1.0, 1.0).asin(),
+            fov: c.vertical_fov,
+            distance: d.length(),
+            orbit: false,
+        }
+    }
+
+    /// Unit view direction.
+    pub fn forward(&self) -> DVec3 {
+        let (sp, cp) = self.pitch.sin_cos();
+        let (sy, cy) = self.yaw.sin_cos();
+        DVec3::new(cp * sy, sp, cp * cy)
+    }
+
+    /// The pinhole camera at an image size.
+    pub fn camera(&self, width: u32, height: u32) -> Camera {
+        Camera::with_size(
+            &CameraSettings {
+                position: self.position,
+                look_at: self.position + self.forward() * self.distance.max(1.0),
+                up: DVec3::Y,
+                vertical_fov: self.fov,
+                width,
+                height,
+            },
+            width,
+            height,
+        )
+    }
+
+    /// Turns by a pointer motion of (dx, dy) pixels in an image `height`
+    /// pixels tall: the scene follows the pointer.
+    pub fn turn(&mut self, dx: f64, dy: f64, height: f64) {
+        let per_pixel = 2.0 * (0.5 * self.fov.to_radians()).tan() / height.max(1.0);
+        let target = self.position + self.forward() * self.distance;
+        self.yaw += dx * per_pixel;
+        self.pitch = (self.pitch + dy * per_pixel).clamp(-1.55, 1.55);
+        if self.orbit {
+            self.position = target - self.forward() * self.distance;
+        }
+    }
+
+    /// Zooms the field of view by `steps` wheel steps (positive: narrower).
+    pub fn zoom(&mut self, steps: f64) {
+        self.fov = (self.fov * 0.9f64.powf(steps)).clamp(MIN_FOV, MAX_FOV);
+    }
+
+    /// Moves along the view (forward), sideways (right) and up, in metres.
+    pub fn fly(&mut self, forward: f64, right: f64, up: f64) {
+        let f = self.forward();
+        let r = f.cross(DVec3::Y).normalize_or_zero();
+        self.position += f * forward + r * right + DVec3::Y * up;
+    }
+}
+
+/// Opens the previewer window on `input`; closes after `frames` frames if
+/// given, saving the last one (picture and panels) to `screenshot`.
+pub fn run(
+    input: Input,
+    width: Option<u32>,
+    height: Option<u32>,
+    albedo: bool,
+    straight: bool,
+    frames: Option<u64>,
+    screenshot: Option<PathBuf>,
+) -> Result<()> {
+    let event_loop = EventLoop::new().map_err(|e| {
+        Error::Failed(format!(
+            "cannot open a window ({e}); is DISPLAY set? (mirage preview --headless renders without one)"
+        ))
+    })?;
+    let size = (width.unwrap_or(1600), height.unwrap_or(900));
+    let mut app = App::new(input, size, albedo, straight, frames, screenshot);
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Failed(format!("window event loop failed: {e}")))?;
+    match app.failure.take() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// The per-parameter slider state.
+struct Slider {
+    param: Param,
+    range: (f64, f64),
+}
+
+/// The GPU side of the window, created once the window exists.
+struct Graphics {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    tracer: Tracer,
+    buffers: SceneBuffers,
+    display: wgpu::RenderPipeline,
+    display_layout: wgpu::BindGroupLayout,
+    display_uniform: wgpu::Buffer,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+struct App {
+    input: Input,
+    size: (u32, u32),
+    medium: LogisticMedium,
+    medium_error: Option<String>,
+    medium_dirty: bool,
+    sliders: Vec<Slider>,
+    camera: CameraState,
+    shading: Shading,
+    straight: bool,
+    spp: u32,
+    render_scale: u32,
+    exposure: f32,
+    edit_hot_spots: bool,
+    drag: Option<Drag>,
+    distances: Vec<f64>,
+    fit: Option<FitJob>,
+    fit_message: String,
+    save_path: String,
+    save_message: String,
+    frames_left: Option<u64>,
+    screenshot: Option<PathBuf>,
+    frame_ms: f64,
+    frame_count: u64,
+    egui: egui::Context,
+    graphics: Option<Graphics>,
+    failure: Option<Error>,
+}
+
+impl App {
+    fn new(
+        input: Input,
+        size: (u32, u32),
+        albedo: bool,
+        straight: bool,
+        frames: Option<u64>,
+        screenshot: Option<PathBuf>,
+    ) -> App {
+        let medium = input.scene.medium.clone();
+        let bounds = |p: Param| {
+            input
+                .problem
+                .as_ref()
+                .and_then(|pr| pr.free.iter().position(|&f| f == p).map(|k| pr.bounds[k]))
+        };
+        let sliders = medium
+            .params()
+            .into_iter()
+            .map(|(param, v)| Slider {
+                param,
+                range: editing::slider_range(param, v, bounds(param)),
+            })
+            .collect();
+        let distances = input
+            .problem
+            .as_ref()
+            .map(|p| editing::pair_distances(p, &medium))
+            .unwrap_or_default();
+        let save_path = editing::edited_path(&input.path).display().to_string();
+        App {
+            camera: CameraState::from_settings(&input.scene.camera),
+            input,
+            size,
+            medium,
+            medium_error: None,
+            medium_dirty: false,
+            sliders,
+            shading: if albedo {
+                Shading::Albedo
+            } else {
+                Shading::Lit
+            },
+            straight,
+            spp: 1,
+            render_scale: 1,
+            exposure: 1.0,
+            edit_hot_spots: false,
+            drag: None,
+            distances,
+            fit: None,
+            fit_message: String::new(),
+            save_path,
+            save_message: String::new(),
+            frames_left: frames,
+            screenshot,
+            frame_ms: 0.0,
+            frame_count: 0,
+            egui: egui::Context::default(),
+            graphics: None,
+            failure: None,
+        }
+    }
+
+    fn view(&self, width: u32, height: u32) -> View {
+        View {
+            camera: self.camera.camera(width, height),
+            shading: self.shading,
+            straight: self.straight,
+            samples_per_pixel: self.spp,
+            hit_fraction: crate::render::RenderOptions::default().hit_fraction,
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: Error) {
+        self.failure = Some(e);
+        event_loop.exit();
+    }
+
+    fn init_graphics(&mut self, event_loop: &ActiveEventLoop) -> Result<Graphics> {
+        let attrs = Window::default_attributes()
+            .with_title(format!("mirage preview: {}", self.input.path.display()))
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.size.0, self.size.1));
+        let window = Arc::new(
+            event_loop
+                .create_window(attrs)
+                .map_err(|e| Error::Failed(format!("cannot create the window: {e}")))?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let surface = instance
+            .create_surface(Arc::clone(&window))
+            .map_err(|e| Error::Failed(format!("cannot create the window's surface: {e}")))?;
+        let gpu = Gpu::with_instance(instance, Some(&surface)).map_err(Error::Failed)?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        // egui wants a non-sRGB target; the display shader encodes sRGB itself.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or_else(|| caps.formats.first().copied())
+            .ok_or_else(|| Error::Failed("the surface supports no format".into()))?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&gpu.device, &config);
+        let view = self.view(64, 36);
+        let buffers = pack(&self.input.scene, &self.medium, &view)
+            .map_err(|m| Error::input(&self.input.path, "objects", m))?;
+        let tracer = Tracer::new(&gpu, &buffers);
+        let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
+        let egui_state = egui_winit::State::new(
+            self.egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&gpu.device, format, egui_wgpu::RendererOptions::default());
+        Ok(Graphics {
+            window,
+            surface,
+            config,
+            gpu,
+            tracer,
+            buffers,
+            display,
+            display_layout,
+            display_uniform,
+            egui_state,
+            egui_renderer,
+        })
+    }
+
+    /// The controls; returns the central area's rectangle (points) and the
+    /// response of the view to the pointer.
+    fn ui(&mut self, ui: &mut egui::Ui) -> (egui::Rect, egui::Response) {
+        egui::Panel::right("controls")
+            .default_size(330.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui));
+            });
+        let inner = egui::CentralPanel::no_frame().show(ui, |ui| {
+            let rect = ui.max_rect();
+            let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+            (rect, response)
+        });
+        inner.inner
+    }
+
+    fn controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading(&self.input.scene.name);
+        if let Some(g) = &self.graphics {
+            ui.label(format!(
+                "{} — {:.1} ms/frame",
+                g.gpu.describe(),
+                self.frame_ms
+            ));
+        }
+        ui.separator();
+        ui.label("View");
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut self.camera.orbit, false, "fly");
+            ui.radio_value(&mut self.camera.orbit, true, "orbit");
+        });
+        ui.add(
+            egui::Slider::new(&mut self.camera.fov, MIN_FOV..=MAX_FOV)
+                .logarithmic(true)
+                .text("field of view (°)"),
+        );
+        if ui.checkbox(&mut self.straight, "straight rays").changed() {
+            self.medium_dirty = true;
+        }
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut self.shading, Shading::Lit, "lit");
+            ui.radio_value(&mut self.shading, Shading::Albedo, "albedo");
+        });
+        ui.add(
+            egui::Slider::new(&mut self.exposure, 0.1..=8.0)
+                .logarithmic(true)
+                .text("exposure"),
+        );
+        ui.add(egui::Slider::new(&mut self.spp, 1..=16).text("samples per pixel"));
+        ui.horizontal(|ui| {
+            ui.label("resolution");
+            for s in [1, 2, 4] {
+                ui.radio_value(&mut self.render_scale, s, format!("1/{s}"));
+            }
+        });
+        let p = self.camera.position;
+        ui.label(format!(
+            "eye ({:.1}, {:.2}, {:.1}) m, heading {:.2}°, elevation {:.3}°",
+            p.x,
+            p.y,
+            p.z,
+            self.camera.yaw.to_degrees(),
+            self.camera.pitch.to_degrees()
+        ));
+        ui.separator();
+        ui.label("Medium");
+        for s in &self.sliders {
+            let Some(mut v) = self.medium.get(s.param) else {
+                continue;
+            };
+            let (lo, hi) = s.range;
+            let r = ui.add(egui::Slider::new(&mut v, lo..=hi).text(s.param.to_string()));
+            if r.changed() && self.medium.set(s.param, v).is_ok() {
+                self.medium_dirty = true;
+            }
+        }
+        if let Some(e) = &self.medium_error {
+            ui.colored_label(egui::Color32::LIGHT_RED, e);
+        }
+        ui.checkbox(
+            &mut self.edit_hot_spots,
+            "drag hot spots on the ground (double-click: add one)",
+        );
+        ui.separator();
+        if let Some(problem) = &self.input.problem {
+            ui.label(format!("Pairs ({} free parameters)", problem.free.len()));
+            for (i, d) in self.distances.iter().enumerate() {
+                ui.label(format!("pair {i}: endpoint {d:.4} m from its target"));
+            }
+            let running = self
+                .fit
+                .as_ref()
+                .is_some_and(|f| f.progress().done.is_none());
+            if ui
+                .add_enabled(
+                    !running && !problem.free.is_empty(),
+                    egui::Button::new("Fit from here"),
+                )
+                .clicked()
+            {
+                self.fit = Some(FitJob::start(problem, &self.medium));
+            }
+            if !self.fit_message.is_empty() {
+                ui.label(&self.fit_message);
+            }
+            ui.separator();
+        }
+        ui.horizontal(|ui| {
+            ui.label("save to");
+            ui.text_edit_singleline(&mut self.save_path);
+        });
+        if ui.button("Save").clicked() {
+            let out = PathBuf::from(&self.save_path);
+            self.save_message = match editing::save(&self.input.path, &self.medium, &out) {
+                Ok(()) => format!("saved {}", out.display()),
+                Err(e) => e.to_string(),
+            };
+        }
+        if !self.save_message.is_empty() {
+            ui.label(&self.save_message);
+        }
+    }
+
+    /// Pointer and keys over the view.
+    fn interact(&mut self, ui: &egui::Ui, rect: egui::Rect, response: &egui::Response) {
+        let ppp = ui.ctx().pixels_per_point() as f64;
+        let (w, h) = (
+            (rect.width() as f64 * ppp).max(1.0),
+            (rect.height() as f64 * ppp).max(1.0),
+        );
+        let cam = self.camera.camera(w as u32, h as u32);
+        let ground_at = |pos: egui::Pos2| {
+            let px = (pos.x - rect.min.x) as f64 * ppp;
+            let py = (pos.y - rect.min.y) as f64 * ppp;
+            editing::ground_point(&cam, px, py).map(|g| DVec2::new(g.x, g.z))
+        };
+        let turn_button = if self.edit_hot_spots {
+            egui::PointerButton::Secondary
+        } else {
+            egui::PointerButton::Primary
+        };
+        if response.dragged_by(turn_button) || response.dragged_by(egui::PointerButton::Secondary) {
+            let d = response.drag_delta();
+            self.camera.turn(d.x as f64 * ppp, d.y as f64 * ppp, h);
+        }
+        if self.edit_hot_spots {
+            if response.drag_started_by(egui::PointerButton::Primary) {
+                self.drag = response
+                    .interact_pointer_pos()
+                    .and_then(ground_at)
+                    .and_then(|g| editing::pick(&self.medium, g));
+            }
+            if response.dragged_by(egui::PointerButton::Primary)
+                && let (Some(drag), Some(g)) = (
+                    self.drag,
+                    response.interact_pointer_pos().and_then(ground_at),
+                )
+            {
+                editing::apply_drag(&mut self.medium, drag, g);
+                self.medium_dirty = true;
+            }
+            if response.drag_stopped() {
+                self.drag = None;
+            }
+            if response.double_clicked()
+                && let Some(g) = response.interact_pointer_pos().and_then(ground_at)
+            {
+                let spot = editing::new_hot_spot(&self.medium, g);
+                self.medium.hotspots.push(spot);
+                self.rebuild_sliders();
+                self.medium_dirty = true;
+            }
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y) as f64;
+            if scroll != 0.0 {
+                self.camera.zoom(scroll / 50.0);
+            }
+        }
+        let (fw, rt, up, fast) = ui.input(|i| {
+            let k = |key| i.key_down(key) as i32 as f64;
+            (
+                k(egui::Key::W) - k(egui::Key::S),
+                k(egui::Key::D) - k(egui::Key::A),
+                k(egui::Key::E) - k(egui::Key::Q),
+                i.modifiers.shift,
+            )
+        });
+        if ui.ctx().memory(|m| m.focused().is_none()) && (fw != 0.0 || rt != 0.0 || up != 0.0) {
+            let speed = if fast { 10.0 } else { 1.0 };
+            self.camera.fly(fw * speed, rt * speed, up * 0.1 * speed);
+        }
+        self.draw_overlays(ui, rect, &cam, ppp);
+    }
+
+    fn rebuild_sliders(&mut self) {
+        let old: Vec<(Param, (f64, f64))> =
+            self.sliders.iter().map(|s| (s.param, s.range)).collect();
+        self.sliders = self
+            .medium
+            .params()
+            .into_iter()
+            .map(|(param, v)| Slider {
+                param,
+                range: old
+                    .iter()
+                    .find(|(p, _)| *p == param)
+                    .map(|(_, r)| *r)
+                    .unwrap_or_else(|| editing::slider_range(param, v, None)),
+            })
+            .collect();
+    }
+
+    fn draw_overlays(&self, ui: &egui::Ui, rect: egui::Rect, cam: &Camera, ppp: f64) {
+        let painter = ui.painter_at(rect);
+        let to_screen = |p: DVec3| {
+            cam.project(p).map(|(x, y)| {
+                egui::pos2(rect.min.x + (x / ppp) as f32, rect.min.y + (y / ppp) as f32)
+            })
+        };
+        let rim = egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 140, 40));
+        for h in &self.medium.hotspots {
+            let mut line: Vec<egui::Pos2> = Vec::new();
+            for k in 0..=96 {
+                let t = std::f64::consts::TAU * k as f64 / 96.0;
+                let p = DVec3::new(h.x + h.radius * t.cos(), 0.0, h.z + h.radius * t.sin());
+                match to_screen(p) {
+                    Some(s) => line.push(s),
+                    None => {
+                        if line.len() > 1 {
+                            painter.line(std::mem::take(&mut line), rim);
+                        }
+                        line.clear();
+                    }
+                }
+            }
+            if line.len() > 1 {
+                painter.line(line, rim);
+            }
+        }
+        if let Some(problem) = &self.input.problem {
+            let through = egui::Stroke::new(1.5, egui::Color32::from_rgb(80, 220, 255));
+            let target = egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 60, 200));
+            for (i, pair) in problem.pairs.iter().enumerate() {
+                if let Some(s) = to_screen(DVec3::from_array(pair.through)) {
+                    painter.circle_stroke(s, 5.0, through);
+                }
+                if let Some(s) = to_screen(DVec3::from_array(pair.target)) {
+                    let d = 5.0;
+                    painter.line_segment([s + egui::vec2(-d, -d), s + egui::vec2(d, d)], target);
+                    painter.line_segment([s + egui::vec2(-d, d), s + egui::vec2(d, -d)], target);
+                    let text = match self.distances.get(i) {
+                        Some(d) => format!("{i}: {d:.3} m"),
+                        None => format!("{i}"),
+                    };
+                    painter.text(
+                        s + egui::vec2(7.0, -7.0),
+                        egui::Align2::LEFT_BOTTOM,
+                        text,
+                        egui::FontId::proportional(12.0),
+                        egui::Color32::WHITE,
+                    );
+                }
+            }
+        }
+    }
+
+    /// Applies an edited medium: validated, re-analysed, uploaded, and the
+    /// pairs re-traced.
+    fn apply_medium(&mut self) {
+        self.medium_dirty = false;
+        if let Err(e) = self.medium.validate() {
+            self.medium_error = Some(format!("medium.{}: {} (not applied)", e.field, e.message));
+            return;
+        }
+        self.medium_error = None;
+        if let Some(p) = &self.input.problem {
+            self.distances = editing::pair_distances(p, &self.medium);
+        }
+        if let Some(g) = &mut self.graphics {
+            let scene = &self.input.scene;
+            let air = Air::new(
+                &self.medium,
+                self.straight,
+                scene.step,
+                scene.ground.is_some(),
+                Aabb::of_objects(&scene.objects),
+            );
+            g.buffers.set_air(&air);
+            g.tracer.update(&g.gpu, &g.buffers);
+        }
+    }
+
+    fn poll_fit(&mut self) {
+        let Some(job) = &self.fit else { return };
+        let p = job.progress();
+        match p.done {
+            None => {
+                self.fit_message = format!(
+                    "fitting: {} iterations ({}), best objective {:.3e}",
+                    p.iterations, p.run, p.best_objective
+                );
+            }
+            Some(Ok(m)) => {
+                self.fit_message = format!("fit done after {} iterations", p.iterations);
+                self.medium = m;
+                self.rebuild_sliders();
+                self.medium_dirty = true;
+                self.fit = None;
+            }
+            Some(Err(e)) => {
+                self.fit_message = format!("fit failed: {e}");
+                self.fit = None;
+            }
+        }
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let start = Instant::now();
+        self.poll_fit();
+        let Some(mut g) = self.graphics.take() else {
+            return Ok(());
+        };
+        let raw = g.egui_state.take_egui_input(&g.window);
+        let ctx = self.egui.clone();
+        let mut view_rect = egui::Rect::NOTHING;
+        let output = ctx.run_ui(raw, |ui| {
+            let (rect, response) = self.ui(ui);
+            self.interact(ui, rect, &response);
+            view_rect = rect;
+        });
+        g.egui_state
+            .handle_platform_output(&g.window, output.platform_output);
+        if self.medium_dirty {
+            self.graphics = Some(g);
+            self.apply_medium();
+            g = self.graphics.take().expect("just put back");
+        }
+        let ppp = output.pixels_per_point;
+        let (fw, fh) = (g.config.width, g.config.height);
+        let rx = ((view_rect.min.x * ppp).max(0.0) as u32).min(fw - 1);
+        let ry = ((view_rect.min.y * ppp).max(0.0) as u32).min(fh - 1);
+        let rw = ((view_rect.width() * ppp) as u32).clamp(1, fw - rx);
+        let rh = ((view_rect.height() * ppp) as u32).clamp(1, fh - ry);
+        let (tw, th) = (
+            (rw / self.render_scale).max(1),
+            (rh / self.render_scale).max(1),
+        );
+        let view = self.view(tw, th);
+        g.buffers.set_view(&view);
+        g.tracer.update(&g.gpu, &g.buffers);
+
+        let frame = match g.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(f)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
+            other => {
+                // Lost or outdated: reconfigure and try next frame.
+                let _ = other;
+                g.surface.configure(&g.gpu.device, &g.config);
+                self.graphics = Some(g);
+                return Ok(());
+            }
+        };
+        let target = frame.texture.create_view(&Default::default());
+        let uniform: [f32; 8] = [
+            rx as f32,
+            ry as f32,
+            rw as f32,
+            rh as f32,
+            tw as f32,
+            th as f32,
+            if self.shading == Shading::Albedo {
+                1.0
+            } else {
+                0.0
+            },
+            self.exposure,
+        ];
+        g.gpu
+            .queue
+            .write_buffer(&g.display_uniform, 0, bytemuck::cast_slice(&uniform));
+        let linear_view = g.tracer.output().create_view(&Default::default());
+        let display_group = g.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("display"),
+            layout: &g.display_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: g.display_uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&linear_view),
+                },
+            ],
+        });
+        let paint = ctx.tessellate(output.shapes, ppp);
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                g.egui_renderer
+                    .update_texture(&g.gpu.device, &g.gpu.queue, *id, delta);
+            }
+        }
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [fw, fh],
+            pixels_per_point: ppp,
+        };
+        let last = self.frames_left == Some(1);
+        let shot_texture = (last && self.screenshot.is_some()).then(|| {
+            g.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("screenshot"),
+                size: wgpu::Extent3d {
+                    width: fw,
+                    height: fh,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: g.config.format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        });
+        let mut encoder = g
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        g.tracer.dispatch(&mut encoder);
+        let mut commands = g.egui_renderer.update_buffers(
+            &g.gpu.device,
+            &g.gpu.queue,
+            &mut encoder,
+            &paint,
+            &screen,
+        );
+        let shot_view = shot_texture
+            .as_ref()
+            .map(|t| t.create_view(&Default::default()));
+        for view in std::iter::once(&target).chain(shot_view.as_ref()) {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("frame"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            pass.set_viewport(rx as f32, ry as f32, rw as f32, rh as f32, 0.0, 1.0);
+            pass.set_pipeline(&g.display);
+            pass.set_bind_group(0, &display_group, &[]);
+            pass.draw(0..3, 0..1);
+            pass.set_viewport(0.0, 0.0, fw as f32, fh as f32, 0.0, 1.0);
+            g.egui_renderer.render(&mut pass, &paint, &screen);
+        }
+        let shot = shot_texture
+            .as_ref()
+            .map(|t| copy_to_buffer(&g.gpu.device, &mut encoder, t));
+        commands.push(encoder.finish());
+        g.gpu.queue.submit(commands);
+        g.gpu.queue.present(frame);
+        for id in &output.textures_delta.free {
+            g.egui_renderer.free_texture(id);
+        }
+        if let (Some((buffer, row)), Some(path)) = (shot, &self.screenshot) {
+            let png = read_png(&g.gpu, &buffer, row, fw, fh, g.config.format)?;
+            write_atomic(path, &png)?;
+        }
+        self.frame_count += 1;
+        self.frame_ms = start.elapsed().as_secs_f64() * 1000.0;
+        if let Some(n) = &mut self.frames_left {
+            *n = n.saturating_sub(1);
+            if *n == 0 {
+                event_loop.exit();
+            }
+        }
+        self.graphics = Some(g);
+        Ok(())
+    }
+}
+
+fn display_pipeline(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout, wgpu::Buffer) {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("display.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(DISPLAY_SHADER.into()),
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("display bindings"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("display layout"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("display"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        multiview_mask: None,
+        cache: None,
+    });
+    let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("display uniform"),
+        size: 32,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    (pipeline, layout, uniform)
+}
+
+fn copy_to_buffer(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+) -> (wgpu::Buffer, u32) {
+    let (w, h) = (texture.width(), texture.height());
+    let row =
+        (4 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("screenshot read-back"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    (buffer, row)
+}
+
+fn read_png(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    row: u32,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+) -> Result<Vec<u8>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Failed(format!("GPU poll failed: {e}")))?;
+    rx.recv()
+        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?
+        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
+    let data = buffer
+        .get_mapped_range(..)
+        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
+    let bgra = matches!(
+        format,
+        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+    );
+    let mut rgb = Vec::with_capacity((3 * w * h) as usize);
+    for y in 0..h {
+        let line = &data[(y * row) as usize..(y * row + 4 * w) as usize];
+        for px in line.chunks_exact(4) {
+            if bgra {
+                rgb.extend_from_slice(&[px[2], px[1], px[0]]);
+            } else {
+                rgb.extend_from_slice(&px[..3]);
+            }
+        }
+    }
+    let img = image::RgbImage::from_raw(w, h, rgb)
+        .ok_or_else(|| Error::Failed("screenshot buffer has the wrong size".into()))?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| Error::Failed(format!("cannot encode the screenshot: {e}")))?;
+    Ok(bytes.into_inner())
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.graphics.is_some() {
+            return;
+        }
+        match self.init_graphics(event_loop) {
+            Ok(g) => {
+                g.window.request_redraw();
+                self.graphics = Some(g);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        if let Some(g) = &mut self.graphics {
+            let _ = g.egui_state.on_window_event(&g.window, &event);
+        }
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(g) = &mut self.graphics
+                    && size.width > 0
+                    && size.height > 0
+                {
+                    g.config.width = size.width;
+                    g.config.height = size.height;
+                    g.surface.configure(&g.gpu.device, &g.config);
+                }
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(event_loop) {
+                    self.fail(event_loop, e);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(g) = &self.graphics {
+            g.window.request_redraw();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state() -> CameraState {
+        CameraState::from_settings(&CameraSettings {
+            position: DVec3::new(0.0, 1.2, 0.0),
+            look_at: DVec3::new(0.0, 1.2, 300.0),
+            up: DVec3::Y,
+            vertical_fov: 1.2,
+            width: 1280,
+            height: 720,
+        })
+    }
+
+    #[test]
+    fn the_scene_camera_round_trips() {
+        let s = state();
+        assert!((s.forward() - DVec3::Z).length() < 1e-12);
+        assert!((s.distance - 300.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn turning_follows_the_pointer_at_any_zoom() {
+        for fov in [60.0, 1.2, 0.05] {
+            let mut s = state();
+            s.fov = fov;
+            let cam = s.camera(1280, 720);
+            // A point at the image centre; drag by 100 px to the right: it must
+            // land 100 px right of the centre.
+            let p = cam.origin + cam.forward * 1000.0;
+            s.turn(100.0, 0.0, 720.0);
+            let (x, y) = s.camera(1280, 720).project(p).unwrap();
+            assert!((x - 740.0).abs() < 1.0, "fov {fov}: x = {x}");
+            assert!((y - 360.0).abs() < 0.5, "fov {fov}: y = {y}");
+        }
+    }
+
+    #[test]
+    fn orbit_keeps_the_target_and_zoom_is_bounded() {
+        let mut s = state();
+        s.orbit = true;
+        let target = s.position + s.forward() * s.distance;
+        s.turn(300.0, -50.0, 720.0);
+        let again = s.position + s.forward() * s.distance;
+        assert!((again - target).length() < 1e-9);
+        s.zoom(1000.0);
+        assert_eq!(s.fov, MIN_FOV);
+        s.zoom(-1000.0);
+        assert_eq!(s.fov, MAX_FOV);
+    }
+}

@@ -1,0 +1,228 @@
+//! The GPU previewer against the CPU renderer, and its command line.
+//!
+//! These tests need a GPU adapter; Mesa's software Vulkan (lavapipe, Debian
+//! `mesa-vulkan-drivers libvulkan1`) is one. Without an adapter they print a
+//! loud SKIPPED line and pass, unless `MIRAGE_REQUIRE_GPU=1` (set by `.ci/run`
+//! after installing lavapipe), where they fail.
+#![cfg(feature = "preview")]
+
+use mirage::preview::gpu::Gpu;
+use mirage::preview::render_frame;
+use mirage::preview::scene_buffers::View;
+use mirage::render::output::ToneMap;
+use mirage::render::{RenderOptions, Renderer, Shading};
+use mirage::scene::Scene;
+use std::path::Path;
+use std::process::Command;
+
+fn require_gpu() -> bool {
+    std::env::var("MIRAGE_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+/// The GPU, or `None` after a loud message (a failure when one is required).
+fn gpu(test: &str) -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(g) => Some(g),
+        Err(e) => {
+            if require_gpu() {
+                panic!("{test}: MIRAGE_REQUIRE_GPU=1 but {e}");
+            }
+            eprintln!(
+                "\n*** SKIPPED {test}: no GPU adapter ({e}); install mesa-vulkan-drivers libvulkan1 for software Vulkan, or set MIRAGE_REQUIRE_GPU=1 to fail instead ***\n"
+            );
+            None
+        }
+    }
+}
+
+fn scene(name: &str) -> Scene {
+    Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("problems/scenes")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// Mean |difference| over channels, and the share of pixels whose largest
+/// channel difference exceeds 0.05, of two images in display values (the
+/// PNG's tone mapping, in [0, 1]).
+fn compare(a: &[[f32; 3]], b: &[[f32; 3]], tone: ToneMap) -> (f64, f64) {
+    assert_eq!(a.len(), b.len());
+    let mut sum = 0.0;
+    let mut bad = 0usize;
+    for (p, q) in a.iter().zip(b) {
+        let mut worst = 0.0f64;
+        for c in 0..3 {
+            let d = (tone.apply(p[c]) as f64 - tone.apply(q[c]) as f64).abs() / 255.0;
+            sum += d;
+            worst = worst.max(d);
+        }
+        if worst > 0.05 {
+            bad += 1;
+        }
+    }
+    (sum / (3 * a.len()) as f64, bad as f64 / a.len() as f64)
+}
+
+fn parity(test: &str, file: &str, width: u32, height: u32) {
+    let Some(gpu) = gpu(test) else { return };
+    let scene = scene(file);
+    eprintln!("{test}: adapter {}", gpu.describe());
+    for shading in [Shading::Albedo, Shading::Lit] {
+        let options = RenderOptions {
+            shading,
+            width: Some(width),
+            height: Some(height),
+            ..RenderOptions::default()
+        };
+        let cpu = Renderer::new(&scene, &options).render();
+        let view = View::of_scene(&scene, &options, width, height);
+        let gpu_pixels = render_frame(&gpu, &scene, &scene.medium, &view).unwrap();
+        let tone = match shading {
+            Shading::Lit => ToneMap::Filmic { exposure: 1.0 },
+            Shading::Albedo => ToneMap::Clamp,
+        };
+        let (mean, share) = compare(&cpu.pixels, &gpu_pixels, tone);
+        eprintln!(
+            "{test}: {file} {shading:?} {width}×{height}: mean |GPU − CPU| = {:.3}/255, pixels off by > 0.05: {:.3} %",
+            mean * 255.0,
+            share * 100.0
+        );
+        assert!(
+            mean < 1.0 / 255.0,
+            "{file} {shading:?}: mean difference {:.3}/255",
+            mean * 255.0
+        );
+        assert!(
+            share < 0.01,
+            "{file} {shading:?}: {:.3} % of pixels differ by more than 0.05",
+            share * 100.0
+        );
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_on_the_stratified_sea() {
+    parity(
+        "gpu_matches_cpu_on_the_stratified_sea",
+        "sea.json",
+        320,
+        180,
+    );
+}
+
+#[test]
+fn gpu_matches_cpu_on_the_hot_road() {
+    parity("gpu_matches_cpu_on_the_hot_road", "road.json", 320, 180);
+}
+
+#[test]
+fn straight_rays_differ_from_curved_ones_on_the_road() {
+    // The straight-rays toggle must change the picture where the mirage is.
+    let Some(gpu) = gpu("straight_rays_differ_from_curved_ones_on_the_road") else {
+        return;
+    };
+    let scene = scene("road.json");
+    let mut options = RenderOptions {
+        shading: Shading::Albedo,
+        ..RenderOptions::default()
+    };
+    let curved = render_frame(
+        &gpu,
+        &scene,
+        &scene.medium,
+        &View::of_scene(&scene, &options, 160, 90),
+    )
+    .unwrap();
+    options.straight = true;
+    let straight = render_frame(
+        &gpu,
+        &scene,
+        &scene.medium,
+        &View::of_scene(&scene, &options, 160, 90),
+    )
+    .unwrap();
+    let (_, share) = compare(&curved, &straight, ToneMap::Clamp);
+    assert!(
+        share > 0.02,
+        "only {:.2} % of pixels changed",
+        share * 100.0
+    );
+}
+
+fn mirage_bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mirage"))
+}
+
+#[test]
+fn headless_preview_of_a_problem_writes_a_png() {
+    let Some(_gpu) = gpu("headless_preview_of_a_problem_writes_a_png") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.png");
+    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
+    let run = mirage_bin()
+        .args([
+            "preview",
+            "--headless",
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "-o",
+        ])
+        .arg(&out)
+        .arg(&problem)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (96, 54));
+    // Sky at the top, ground at the bottom: the picture is not uniform.
+    let top = img.get_pixel(48, 2);
+    let bottom = img.get_pixel(48, 52);
+    assert_ne!(top, bottom);
+}
+
+#[test]
+fn bad_input_is_reported_with_exit_code_2() {
+    // No GPU needed: the input is checked before one is opened.
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(
+        &bad,
+        r#"{"camera": {"position": [0, 1, 0], "look_at": [0, 1, 10], "vertical_fov": 0, "width": 10, "height": 10}, "medium": {}}"#,
+    )
+    .unwrap();
+    let out = dir.path().join("frame.png");
+    let run = mirage_bin()
+        .args(["preview", "--headless", "-o"])
+        .arg(&out)
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("bad.json") && err.contains("camera.vertical_fov"),
+        "{err}"
+    );
+    assert!(!out.exists());
+
+    let neither = dir.path().join("neither.json");
+    std::fs::write(&neither, r#"{"name": "x"}"#).unwrap();
+    let run = mirage_bin()
+        .args(["preview", "--headless", "-o"])
+        .arg(&out)
+        .arg(&neither)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("neither.json"));
+}
