@@ -75,6 +75,8 @@ pub struct Tracer {
     objects: wgpu::Buffer,
     nodes: wgpu::Buffer,
     profile: wgpu::Buffer,
+    cells: wgpu::Buffer,
+    near: wgpu::Buffer,
     sky: wgpu::Texture,
     output: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -140,7 +142,7 @@ impl Tracer {
             },
             count: None,
         }];
-        entries.extend((1..=4).map(storage_entry));
+        entries.extend((1..=4).chain(7..=8).map(storage_entry));
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 5,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -203,8 +205,16 @@ impl Tracer {
         let objects = storage_buffer(device, "objects", bytemuck::cast_slice(&scene.objects));
         let nodes = storage_buffer(device, "nodes", bytemuck::cast_slice(&scene.nodes));
         let profile = storage_buffer(device, "profile", bytemuck::cast_slice(&scene.profile));
+        let cells = storage_buffer(device, "grid cells", bytemuck::cast_slice(&scene.cells));
+        let near = storage_buffer(device, "near lists", bytemuck::cast_slice(&scene.near));
         let bind_group = Self::bind(
-            device, &layout, &params, &hotspots, &objects, &nodes, &profile, &sky, &output,
+            device,
+            &layout,
+            [
+                &params, &hotspots, &objects, &nodes, &profile, &cells, &near,
+            ],
+            &sky,
+            &output,
         );
         let tracer = Tracer {
             pipeline,
@@ -214,6 +224,8 @@ impl Tracer {
             objects,
             nodes,
             profile,
+            cells,
+            near,
             sky,
             output,
             bind_group,
@@ -224,53 +236,37 @@ impl Tracer {
         tracer
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// The bind group: `buffers` are the uniform block, then the storage
+    /// buffers at bindings 1–4 and 7–8.
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        params: &wgpu::Buffer,
-        hotspots: &wgpu::Buffer,
-        objects: &wgpu::Buffer,
-        nodes: &wgpu::Buffer,
-        profile: &wgpu::Buffer,
+        buffers: [&wgpu::Buffer; 7],
         sky: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> wgpu::BindGroup {
         let sky_view = sky.create_view(&Default::default());
         let out_view = output.create_view(&Default::default());
+        let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .zip([0, 1, 2, 3, 4, 7, 8])
+            .map(|(b, binding)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 5,
+            resource: wgpu::BindingResource::TextureView(&sky_view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: wgpu::BindingResource::TextureView(&out_view),
+        });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace bind group"),
             layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: hotspots.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: objects.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: nodes.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: profile.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&sky_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&out_view),
-                },
-            ],
+            entries: &entries,
         })
     }
 
@@ -338,11 +334,15 @@ impl Tracer {
             self.bind_group = Self::bind(
                 device,
                 &self.layout,
-                &self.params,
-                &self.hotspots,
-                &self.objects,
-                &self.nodes,
-                &self.profile,
+                [
+                    &self.params,
+                    &self.hotspots,
+                    &self.objects,
+                    &self.nodes,
+                    &self.profile,
+                    &self.cells,
+                    &self.near,
+                ],
                 &self.sky,
                 &self.output,
             );

@@ -16,7 +16,7 @@
 //! operations, so the stack never holds more than the tree's depth + 1 values.
 
 use crate::medium::LogisticMedium;
-use crate::render::accel::Aabb;
+use crate::render::accel::{Aabb, Grid};
 use crate::render::air::Air;
 use crate::render::camera::Camera;
 use crate::render::sky::{Sky, SkyModel};
@@ -38,6 +38,8 @@ pub const SKY_HEIGHT: u32 = 1025;
 /// Largest number of distance queries for one ray (as the CPU's
 /// [`crate::render::march::MAX_QUERIES`]).
 pub const MAX_QUERIES: u32 = crate::render::march::MAX_QUERIES;
+/// Scenes with more objects than this are queried through the distance grid.
+pub const GRID_MIN_OBJECTS: usize = 8;
 /// Stand-in for infinity in the buffers (shader compilers may assume that no
 /// value is infinite).
 const BIG: f32 = 1e30;
@@ -153,6 +155,29 @@ pub struct Params {
     pub disc_radiance: [f32; 4],
     /// `[sky table width, height, samples per pixel, max queries]`.
     pub counts: [u32; 4],
+    /// Distance grid's box, low corner (its y is the floor); `w`: 1 if there
+    /// is a grid.
+    pub grid_min: [f32; 4],
+    /// Distance grid's box, high corner; `w`: the cheap-query threshold.
+    pub grid_max: [f32; 4],
+    /// Cells along x, y, z.
+    pub grid_dims: [u32; 4],
+    /// Cell size.
+    pub grid_cell: [f32; 4],
+}
+
+/// One cell of the distance grid ([`crate::render::accel::Grid`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCell {
+    /// No surface within this distance of the cell's centre.
+    pub empty: f32,
+    /// Lower bound of the distance to every object off the near list.
+    pub far: f32,
+    /// Near list start in [`SceneBuffers::near`].
+    pub start: u32,
+    /// Near list length.
+    pub len: u32,
 }
 
 /// Everything the shader reads, ready to upload.
@@ -170,6 +195,10 @@ pub struct SceneBuffers {
     pub profile: Vec<[f32; 4]>,
     /// The sky's smooth radiance, `SKY_WIDTH × SKY_HEIGHT` RGBA, row-major.
     pub sky: Vec<[f32; 4]>,
+    /// The distance grid's cells (at least one element).
+    pub cells: Vec<GpuCell>,
+    /// The grid's near lists (at least one element).
+    pub near: Vec<u32>,
 }
 
 /// What the GPU frame shows, beyond the scene: the view and the switches the
@@ -516,7 +545,53 @@ pub fn pack(scene: &Scene, medium: &LogisticMedium, view: &View) -> Result<Scene
         nodes,
         profile: Vec::new(),
         sky: bake_sky(&SkyModel::from_spec(&scene.sky)),
+        cells: Vec::new(),
+        near: Vec::new(),
     };
+    // The CPU renderer's grid of unbounding spheres and near lists, cut at
+    // the ground as there.
+    let floor = if scene.ground.is_some() {
+        0.0
+    } else {
+        f64::NEG_INFINITY
+    };
+    // (With few objects, evaluating them all is as cheap and takes longer
+    // steps.)
+    let grid = if scene.objects.len() > GRID_MIN_OBJECTS {
+        Grid::build(&scene.objects, floor)
+    } else {
+        None
+    };
+    if let Some(grid) = grid {
+        let raw = grid.raw();
+        let p = &mut buffers.params;
+        p.grid_min = v4(raw.bounds.min, 1.0);
+        p.grid_max = v4(raw.bounds.max, raw.cheap_min);
+        p.grid_dims = [
+            raw.dims[0] as u32,
+            raw.dims[1] as u32,
+            raw.dims[2] as u32,
+            0,
+        ];
+        p.grid_cell = v4(raw.cell, 0.0);
+        buffers.cells = raw
+            .cells
+            .iter()
+            .map(|&(empty, far, start, len)| GpuCell {
+                empty: finite_or_big(empty) as f32,
+                far: finite_or_big(far) as f32,
+                start,
+                len,
+            })
+            .collect();
+        buffers.near = raw.near.to_vec();
+    }
+    if buffers.cells.is_empty() {
+        buffers.cells.push(GpuCell::default());
+    }
+    if buffers.near.is_empty() {
+        buffers.near.push(0);
+    }
     buffers.set_air(&air);
     buffers.set_view(view);
     let p = &mut buffers.params;

@@ -27,7 +27,12 @@ struct Params {
     disc_dir: vec4<f32>,
     disc_radiance: vec4<f32>,
     counts: vec4<u32>,
+    grid_min: vec4<f32>,
+    grid_max: vec4<f32>,
+    grid_dims: vec4<u32>,
+    grid_cell: vec4<f32>,
 }
+struct Cell { empty: f32, far: f32, start: u32, len: u32 }
 
 struct HotSpot { a: vec4<f32>, b: vec4<f32>, c: vec4<f32> }
 struct Object { range: vec4<u32>, albedo: vec4<f32>, center: vec4<f32> }
@@ -40,6 +45,8 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 @group(0) @binding(4) var<storage, read> profile: array<vec4<f32>>;
 @group(0) @binding(5) var sky: texture_2d<f32>;
 @group(0) @binding(6) var out_image: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(7) var<storage, read> cells: array<Cell>;
+@group(0) @binding(8) var<storage, read> near: array<u32>;
 
 const PI: f32 = 3.14159265358979;
 const BIG: f32 = 1e30;
@@ -259,9 +266,9 @@ fn run_program(start: u32, count: u32, p: vec3<f32>) -> f32 {
     return stack[0];
 }
 
-// (distance, nearest object index as f32) over every object; objects whose
-// bounding sphere is farther than the best so far are skipped.
-fn scene_distance(p: vec3<f32>) -> vec2<f32> {
+// (distance, nearest object index as f32; −1: unknown) over every object;
+// objects whose bounding sphere is farther than the best so far are skipped.
+fn all_objects_distance(p: vec3<f32>) -> vec2<f32> {
     var best = BIG;
     var index = 0u;
     for (var i = 0u; i < P.size.w; i++) {
@@ -276,15 +283,44 @@ fn scene_distance(p: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(best, f32(index));
 }
 
+// The distance query through the grid of unbounding spheres and near lists
+// (render/accel.rs, `Grid::probe_cell`).
+fn scene_distance(p: vec3<f32>) -> vec2<f32> {
+    if (P.grid_min.w < 0.5 || p.y < P.grid_min.y) { return all_objects_distance(p); }
+    let lo = P.grid_min.xyz;
+    let hi = P.grid_max.xyz;
+    let outside = length(max(max(lo - p, p - hi), vec3<f32>(0.0)));
+    let q = (p - lo) / P.grid_cell.xyz;
+    let ijk = min(vec3<u32>(max(floor(q), vec3<f32>(0.0))), P.grid_dims.xyz - vec3<u32>(1u));
+    let c = lo + (vec3<f32>(ijk) + vec3<f32>(0.5)) * P.grid_cell.xyz;
+    let cell = cells[ijk.x + P.grid_dims.x * (ijk.y + P.grid_dims.y * ijk.z)];
+    let cheap = max(cell.empty - length(p - c), outside);
+    if (cheap >= P.grid_max.w) { return vec2<f32>(cheap, -1.0); }
+    var best = cell.far - outside;
+    var index = -1.0;
+    for (var k = cell.start; k < cell.start + cell.len; k++) {
+        let o = near[k];
+        let d = run_program(objects[o].range.x, objects[o].range.y, p);
+        if (d < best) {
+            best = d;
+            index = f32(o);
+        }
+    }
+    if (cheap > best) { return vec2<f32>(cheap, -1.0); }
+    return vec2<f32>(best, index);
+}
+
 fn object_distance(i: u32, p: vec3<f32>) -> f32 {
     return run_program(objects[i].range.x, objects[i].range.y, p);
 }
 
 // ------------------------------------------------------------- the ray path
 
+// One RK4 step: states at both ends (position, v = n·t, dv/dτ, arc length,
+// δ) and its τ length.
 struct Seg {
-    x0: vec3<f32>, v0: vec3<f32>, a0: vec3<f32>, s0: f32,
-    x1: vec3<f32>, v1: vec3<f32>, a1: vec3<f32>, s1: f32,
+    x0: vec3<f32>, v0: vec3<f32>, a0: vec3<f32>, s0: f32, d0: f32,
+    x1: vec3<f32>, v1: vec3<f32>, a1: vec3<f32>, s1: f32, d1: f32,
     h: f32,
 }
 
@@ -365,7 +401,7 @@ fn ground_crossing(s: Seg) -> f32 {
     return -1.0;
 }
 
-fn rk4(x: vec3<f32>, v: vec3<f32>, a: vec3<f32>, s: f32, h: f32) -> Seg {
+fn rk4(x: vec3<f32>, v: vec3<f32>, a: vec3<f32>, s: f32, d: f32, h: f32) -> Seg {
     let m2 = medium(x + v * (0.5 * h));
     let v2 = v + a * (0.5 * h);
     let a2 = rate_dv(m2);
@@ -375,12 +411,11 @@ fn rk4(x: vec3<f32>, v: vec3<f32>, a: vec3<f32>, s: f32, h: f32) -> Seg {
     let m4 = medium(x + v3 * h);
     let v4 = v + a3 * h;
     let a4 = rate_dv(m4);
-    let m1 = medium(x);
     let x1 = x + (v + 2.0 * v2 + 2.0 * v3 + v4) * (h / 6.0);
     let v1 = v + (a + 2.0 * a2 + 2.0 * a3 + a4) * (h / 6.0);
-    let s1 = s + ((1.0 + m1.w) + 2.0 * (1.0 + m2.w) + 2.0 * (1.0 + m3.w) + (1.0 + m4.w)) * (h / 6.0);
+    let s1 = s + ((1.0 + d) + 2.0 * (1.0 + m2.w) + 2.0 * (1.0 + m3.w) + (1.0 + m4.w)) * (h / 6.0);
     let m5 = medium(x1);
-    return Seg(x, v, a, s, x1, v1, rate_dv(m5), s1, h);
+    return Seg(x, v, a, s, d, x1, v1, rate_dv(m5), s1, m5.w, h);
 }
 
 // ------------------------------------------------------------------- the sky
@@ -422,7 +457,8 @@ fn tolerance(s: f32) -> f32 {
 fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
     let n_max = P.air.x * (1.0 + 1e-7);
     let m0 = medium(origin);
-    var seg = Seg(origin, dir * (1.0 + m0.w), rate_dv(m0), 0.0, origin, dir * (1.0 + m0.w), rate_dv(m0), 0.0, 0.0);
+    let v0 = dir * (1.0 + m0.w);
+    var seg = Seg(origin, v0, rate_dv(m0), 0.0, m0.w, origin, v0, rate_dv(m0), 0.0, m0.w, 0.0);
     var theta = 1.0;
     var arc_per_theta = 0.0;
     var ground_theta = -1.0;
@@ -443,7 +479,9 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
             queries += 1u;
             let arc = seg.s0 + theta * (seg.s1 - seg.s0);
             if (q.x < tolerance(arc) || queries >= P.counts.w) {
-                return Outcome(1u, u32(q.y), p, normalize(v), arc);
+                var index = q.y;
+                if (index < 0.0) { index = all_objects_distance(p).y; }
+                return Outcome(1u, u32(index), p, normalize(v), arc);
             }
             let f = fate(p, v);
             if (f.kind == 1u) { return Outcome(0u, 0u, p, f.dir, arc); }
@@ -456,7 +494,7 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
         // Advance by at most `budget` of arc (unlimited when free).
         if (theta >= 1.0) {
             let h_arc = min(step_at(seg.x1), max_distance);
-            seg = rk4(seg.x1, seg.v1, seg.a1, seg.s1, h_arc / n_max);
+            seg = rk4(seg.x1, seg.v1, seg.a1, seg.s1, seg.d1, h_arc / n_max);
             theta = 0.0;
             arc_per_theta = h_arc;
             ground_theta = -1.0;

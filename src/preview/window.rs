@@ -297,6 +297,10 @@ impl App {
             .create_surface(Arc::clone(&window))
             .map_err(|e| Error::Failed(format!("cannot create the window's surface: {e}")))?;
         let gpu = Gpu::with_instance(instance, Some(&surface)).map_err(Error::Failed)?;
+        // A software adapter (lavapipe) starts at half resolution.
+        if gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+            self.render_scale = 2;
+        }
         let caps = surface.get_capabilities(&gpu.adapter);
         // egui wants a non-sRGB target; the display shader encodes sRGB itself.
         let format = caps

@@ -499,4 +499,38 @@ impl Grid {
     pub fn half_diagonal(&self) -> f64 {
         self.half_diag
     }
+
+    /// The grid as plain arrays, for the GPU previewer (which queries it the
+    /// same way).
+    pub fn raw(&self) -> RawGrid<'_> {
+        RawGrid {
+            bounds: self.bounds,
+            dims: self.dims,
+            cell: self.cell,
+            cheap_min: self.cheap_min,
+            cells: self
+                .cells
+                .iter()
+                .map(|c| (c.empty, c.far, c.start, c.len))
+                .collect(),
+            near: &self.near,
+        }
+    }
+}
+
+/// A [`Grid`]'s data as plain arrays (see [`Grid::raw`]).
+#[derive(Clone, Debug)]
+pub struct RawGrid<'a> {
+    /// The box the grid covers (its low y is the floor).
+    pub bounds: Aabb,
+    /// Cells along x, y, z (x fastest in `cells`).
+    pub dims: [usize; 3],
+    /// Cell size.
+    pub cell: DVec3,
+    /// Below this free radius a query evaluates the near list.
+    pub cheap_min: f64,
+    /// Per cell: empty radius at the centre, far bound, near-list start and length.
+    pub cells: Vec<(f64, f64, u32, u32)>,
+    /// The near lists (object indices).
+    pub near: &'a [u32],
 }
