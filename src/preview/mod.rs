@@ -132,7 +132,7 @@ pub fn render_frame(
     view: &View,
 ) -> Result<Vec<[f32; 3]>> {
     let buffers =
-        pack(scene, medium, view).map_err(|m| Error::input(&scene.source, "objects", m))?;
+        pack(scene, medium, view).map_err(|e| Error::input(&scene.source, e.field, e.message))?;
     let tracer = Tracer::new(gpu, &buffers);
     tracer.render_to_cpu(gpu).map_err(Error::Failed)
 }
@@ -218,6 +218,20 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
     if let Some(shot) = &o.screenshot {
         check_png(shot, &inputs)?;
     }
+    if o.frames == Some(0) {
+        return Err(Error::input(cli, "--frames", "must be at least 1"));
+    }
+    if o.headless && (o.frames.is_some() || o.screenshot.is_some()) {
+        return Err(Error::input(
+            cli,
+            if o.frames.is_some() {
+                "--frames"
+            } else {
+                "--screenshot"
+            },
+            "only for the window (a headless frame goes to --output)",
+        ));
+    }
     if !o.headless {
         if o.output.is_some() || o.bench {
             return Err(Error::input(
@@ -260,11 +274,11 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
             _ => frame_size(scene, width, height),
         };
         let view = View::of_scene(scene, &options, w, h);
-        let buffers =
-            pack(scene, &scene.medium, &view).map_err(|m| Error::input(&o.input, "objects", m))?;
+        let buffers = pack(scene, &scene.medium, &view)
+            .map_err(|e| Error::input(&o.input, e.field, e.message))?;
         let tracer = Tracer::new(&gpu, &buffers);
         tracer.render(&gpu);
-        let frames = 5;
+        let frames = 3;
         let start = Instant::now();
         for _ in 0..frames {
             tracer.render(&gpu);

@@ -406,18 +406,31 @@ fn compile(sdf: &Sdf, frame: Frame, out: &mut Vec<Node>) -> usize {
     }
 }
 
+/// A scene the previewer cannot pack: the field (`objects[3].shape`) and why.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct PackError {
+    /// Path of the offending field in the scene file.
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
 /// The SDF programs of `objects` and their records; errors when a tree needs
 /// a deeper stack than the shader has.
-pub fn compile_objects(objects: &[SceneObject]) -> Result<(Vec<GpuObject>, Vec<Node>), String> {
+pub fn compile_objects(objects: &[SceneObject]) -> Result<(Vec<GpuObject>, Vec<Node>), PackError> {
     let mut nodes = Vec::new();
     let mut records = Vec::new();
     for (i, o) in objects.iter().enumerate() {
         let start = nodes.len();
         let depth = compile(&o.shape, Frame::IDENTITY, &mut nodes);
         if depth > STACK_DEPTH {
-            return Err(format!(
-                "objects[{i}].shape: nested {depth} levels deep, more than the previewer's {STACK_DEPTH}"
-            ));
+            return Err(PackError {
+                field: format!("objects[{i}].shape"),
+                message: format!(
+                    "nested {depth} levels deep, more than the previewer's {STACK_DEPTH}"
+                ),
+            });
         }
         let (c, r) = o.shape.bounding_sphere();
         let r = if r.is_finite() && c.is_finite() {
@@ -528,7 +541,11 @@ pub fn bake_sky(sky: &SkyModel) -> Vec<[f32; 4]> {
 
 /// Packs `scene` (with `medium` instead of the scene's own, so that the
 /// editor can change the air without rebuilding the scene) for `view`.
-pub fn pack(scene: &Scene, medium: &LogisticMedium, view: &View) -> Result<SceneBuffers, String> {
+pub fn pack(
+    scene: &Scene,
+    medium: &LogisticMedium,
+    view: &View,
+) -> Result<SceneBuffers, PackError> {
     let objects_box = Aabb::of_objects(&scene.objects);
     let air = Air::new(
         medium,
@@ -804,7 +821,8 @@ mod tests {
             shape: s,
         };
         let err = compile_objects(&[obj]).unwrap_err();
-        assert!(err.contains("objects[0].shape"), "{err}");
+        assert_eq!(err.field, "objects[0].shape");
+        assert!(err.message.contains("21 levels deep"), "{err}");
     }
 
     #[test]

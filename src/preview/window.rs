@@ -325,7 +325,7 @@ impl App {
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
         let buffers = pack(&self.input.scene, &self.medium, &view)
-            .map_err(|m| Error::input(&self.input.path, "objects", m))?;
+            .map_err(|e| Error::input(&self.input.path, e.field, e.message))?;
         let tracer = Tracer::new(&gpu, &buffers);
         let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
         let egui_state = egui_winit::State::new(
