@@ -679,7 +679,7 @@ impl App {
         let raw = g.egui_state.take_egui_input(&g.window);
         let ctx = self.egui.clone();
         let mut view_rect = egui::Rect::NOTHING;
-        let output = ctx.run_ui(raw, |ui| {
+        let mut output = ctx.run_ui(raw, |ui| {
             let (rect, response) = self.ui(ui);
             self.interact(ui, rect, &response);
             view_rect = rect;
@@ -705,6 +705,15 @@ impl App {
         g.buffers.set_view(&view);
         g.tracer.update(&g.gpu, &g.buffers);
 
+        // egui's texture changes are applied now, whether or not this frame
+        // is presented (an unapplied delta is a bug egui checks for).
+        let mut textures = std::mem::take(&mut output.textures_delta);
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                g.egui_renderer
+                    .update_texture(&g.gpu.device, &g.gpu.queue, *id, delta);
+            }
+        }
         let frame = match g.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(f)
             | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
@@ -712,6 +721,10 @@ impl App {
                 // Lost or outdated: reconfigure and try next frame.
                 let _ = other;
                 g.surface.configure(&g.gpu.device, &g.config);
+                for id in &textures.free {
+                    g.egui_renderer.free_texture(id);
+                }
+                textures.clear();
                 self.graphics = Some(g);
                 return Ok(());
             }
@@ -750,12 +763,6 @@ impl App {
             ],
         });
         let paint = ctx.tessellate(output.shapes, ppp);
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                g.egui_renderer
-                    .update_texture(&g.gpu.device, &g.gpu.queue, *id, delta);
-            }
-        }
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [fw, fh],
             pixels_per_point: ppp,
@@ -824,9 +831,10 @@ impl App {
         commands.push(encoder.finish());
         g.gpu.queue.submit(commands);
         g.gpu.queue.present(frame);
-        for id in &output.textures_delta.free {
+        for id in &textures.free {
             g.egui_renderer.free_texture(id);
         }
+        textures.clear();
         if let (Some((buffer, row)), Some(path)) = (shot, &self.screenshot) {
             let png = read_png(&g.gpu, &buffer, row, fw, fh, g.config.format)?;
             write_atomic(path, &png)?;
