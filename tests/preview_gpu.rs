@@ -15,6 +15,13 @@ use mirage::scene::Scene;
 use std::path::Path;
 use std::process::Command;
 
+/// Writes to the process's stderr directly, past the test harness's capture,
+/// so that a skip is seen in a plain `cargo test`.
+fn loud(message: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "\n{message}\n");
+}
+
 fn require_gpu() -> bool {
     std::env::var("MIRAGE_REQUIRE_GPU").is_ok_and(|v| v == "1")
 }
@@ -27,9 +34,9 @@ fn gpu(test: &str) -> Option<Gpu> {
             if require_gpu() {
                 panic!("{test}: MIRAGE_REQUIRE_GPU=1 but {e}");
             }
-            eprintln!(
-                "\n*** SKIPPED {test}: no GPU adapter ({e}); install mesa-vulkan-drivers libvulkan1 for software Vulkan, or set MIRAGE_REQUIRE_GPU=1 to fail instead ***\n"
-            );
+            loud(&format!(
+                "*** SKIPPED {test}: {e}; install mesa-vulkan-drivers libvulkan1 for software Vulkan, or set MIRAGE_REQUIRE_GPU=1 to fail instead ***"
+            ));
             None
         }
     }

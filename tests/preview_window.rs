@@ -9,6 +9,13 @@
 use std::path::Path;
 use std::process::Command;
 
+/// Writes to the process's stderr directly, past the test harness's capture,
+/// so that a skip is seen in a plain `cargo test`.
+fn loud(message: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "\n{message}\n");
+}
+
 fn have(program: &str) -> bool {
     Command::new("sh")
         .args(["-c", &format!("command -v {program} >/dev/null 2>&1")])
@@ -21,16 +28,16 @@ fn the_window_opens_renders_frames_and_exits_cleanly() {
     let required = std::env::var("MIRAGE_REQUIRE_GPU").is_ok_and(|v| v == "1");
     if !have("xvfb-run") {
         assert!(!required, "MIRAGE_REQUIRE_GPU=1 but xvfb-run is missing");
-        eprintln!(
-            "\n*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: no xvfb-run (apt-get install xvfb xauth) ***\n"
-        );
+        loud(&format!(
+            "*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: no xvfb-run (apt-get install xvfb xauth) ***"
+        ));
         return;
     }
     if let Err(e) = mirage::preview::gpu::Gpu::new() {
         assert!(!required, "MIRAGE_REQUIRE_GPU=1 but {e}");
-        eprintln!(
-            "\n*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: no GPU adapter ({e}) ***\n"
-        );
+        loud(&format!(
+            "*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: {e} ***"
+        ));
         return;
     }
     let dir = tempfile::tempdir().unwrap();
