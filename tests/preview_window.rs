@@ -28,9 +28,9 @@ fn the_window_opens_renders_frames_and_exits_cleanly() {
     let required = std::env::var("MIRAGE_REQUIRE_GPU").is_ok_and(|v| v == "1");
     if !have("xvfb-run") {
         assert!(!required, "MIRAGE_REQUIRE_GPU=1 but xvfb-run is missing");
-        loud(&format!(
-            "*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: no xvfb-run (apt-get install xvfb xauth) ***"
-        ));
+        loud(
+            "*** SKIPPED the_window_opens_renders_frames_and_exits_cleanly: no xvfb-run (apt-get install xvfb xauth) ***",
+        );
         return;
     }
     if let Err(e) = mirage::preview::gpu::Gpu::new() {
