@@ -466,6 +466,6 @@ mod tests {
     #[test]
     fn the_shaders_are_valid_wgsl() {
         validate("trace.wgsl", super::TRACE_SHADER);
-        validate("display.wgsl", crate::preview::window::DISPLAY_SHADER);
+        validate("display.wgsl", crate::preview::display::DISPLAY_SHADER);
     }
 }

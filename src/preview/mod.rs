@@ -13,6 +13,8 @@
 //! distance grid (the GPU evaluates every object whose bounding sphere is
 //! nearer than the best distance so far).
 
+pub mod camera;
+pub mod display;
 pub mod editing;
 pub mod gpu;
 pub mod scene_buffers;

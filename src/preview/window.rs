@@ -18,6 +18,8 @@
 //! mark where things are, the traced image shows where they appear.
 
 use super::Input;
+use super::camera::{CameraState, MAX_FOV, MIN_FOV};
+use super::display::{copy_to_buffer, display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
 use super::gpu::{Gpu, Tracer};
 use super::scene_buffers::{SceneBuffers, View, pack};
@@ -28,7 +30,6 @@ use crate::render::Shading;
 use crate::render::accel::Aabb;
 use crate::render::air::Air;
 use crate::render::camera::Camera;
-use crate::scene::description::CameraSettings;
 use glam::{DVec2, DVec3};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -37,94 +38,6 @@ use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
-
-/// The display shader (WGSL).
-pub const DISPLAY_SHADER: &str = include_str!("display.wgsl");
-
-/// Narrowest field of view the wheel zooms to (degrees).
-pub const MIN_FOV: f64 = 0.01;
-/// Widest field of view (degrees).
-pub const MAX_FOV: f64 = 120.0;
-
-/// Where the camera is and how it turns.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraState {
-    /// Eye position.
-    pub position: DVec3,
-    /// Heading (radians, from +z toward +x).
-    pub yaw: f64,
-    /// Elevation of the view direction (radians).
-    pub pitch: f64,
-    /// Vertical field of view (degrees).
-    pub fov: f64,
-    /// Distance to the point orbited.
-    pub distance: f64,
-    /// Orbit (true) or fly.
-    pub orbit: bool,
-}
-
-impl CameraState {
-    /// The state of a scene's camera.
-    pub fn from_settings(c: &CameraSettings) -> CameraState {
-        let d = c.look_at - c.position;
-        let f = d.normalize();
-        CameraState {
-            position: c.position,
-            yaw: f.x.atan2(f.z),
-            pitch: f.y.clamp(-1.0, 1.0).asin(),
-            fov: c.vertical_fov,
-            distance: d.length(),
-            orbit: false,
-        }
-    }
-
-    /// Unit view direction.
-    pub fn forward(&self) -> DVec3 {
-        let (sp, cp) = self.pitch.sin_cos();
-        let (sy, cy) = self.yaw.sin_cos();
-        DVec3::new(cp * sy, sp, cp * cy)
-    }
-
-    /// The pinhole camera at an image size.
-    pub fn camera(&self, width: u32, height: u32) -> Camera {
-        Camera::with_size(
-            &CameraSettings {
-                position: self.position,
-                look_at: self.position + self.forward() * self.distance.max(1.0),
-                up: DVec3::Y,
-                vertical_fov: self.fov,
-                width,
-                height,
-            },
-            width,
-            height,
-        )
-    }
-
-    /// Turns by a pointer motion of (dx, dy) pixels in an image `height`
-    /// pixels tall: the scene follows the pointer.
-    pub fn turn(&mut self, dx: f64, dy: f64, height: f64) {
-        let per_pixel = 2.0 * (0.5 * self.fov.to_radians()).tan() / height.max(1.0);
-        let target = self.position + self.forward() * self.distance;
-        self.yaw += dx * per_pixel;
-        self.pitch = (self.pitch + dy * per_pixel).clamp(-1.55, 1.55);
-        if self.orbit {
-            self.position = target - self.forward() * self.distance;
-        }
-    }
-
-    /// Zooms the field of view by `steps` wheel steps (positive: narrower).
-    pub fn zoom(&mut self, steps: f64) {
-        self.fov = (self.fov * 0.9f64.powf(steps)).clamp(MIN_FOV, MAX_FOV);
-    }
-
-    /// Moves along the view (forward), sideways (right) and up, in metres.
-    pub fn fly(&mut self, forward: f64, right: f64, up: f64) {
-        let f = self.forward();
-        let r = f.cross(DVec3::Y).normalize_or_zero();
-        self.position += f * forward + r * right + DVec3::Y * up;
-    }
-}
 
 /// Opens the previewer window on `input`; closes after `frames` frames if
 /// given, saving the last one (picture and panels) to `screenshot`.
@@ -852,160 +765,6 @@ impl App {
     }
 }
 
-fn display_pipeline(
-    device: &wgpu::Device,
-    format: wgpu::TextureFormat,
-) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout, wgpu::Buffer) {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("display.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(DISPLAY_SHADER.into()),
-    });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("display bindings"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-        ],
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("display layout"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("display"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        multiview_mask: None,
-        cache: None,
-    });
-    let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("display uniform"),
-        size: 32,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    (pipeline, layout, uniform)
-}
-
-fn copy_to_buffer(
-    device: &wgpu::Device,
-    encoder: &mut wgpu::CommandEncoder,
-    texture: &wgpu::Texture,
-) -> (wgpu::Buffer, u32) {
-    let (w, h) = (texture.width(), texture.height());
-    let row =
-        (4 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot read-back"),
-        size: (row * h) as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    (buffer, row)
-}
-
-fn read_png(
-    gpu: &Gpu,
-    buffer: &wgpu::Buffer,
-    row: u32,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-) -> Result<Vec<u8>> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Failed(format!("GPU poll failed: {e}")))?;
-    rx.recv()
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
-    let data = buffer
-        .get_mapped_range(..)
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
-    let bgra = matches!(
-        format,
-        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
-    );
-    let mut rgb = Vec::with_capacity((3 * w * h) as usize);
-    for y in 0..h {
-        let line = &data[(y * row) as usize..(y * row + 4 * w) as usize];
-        for px in line.chunks_exact(4) {
-            if bgra {
-                rgb.extend_from_slice(&[px[2], px[1], px[0]]);
-            } else {
-                rgb.extend_from_slice(&px[..3]);
-            }
-        }
-    }
-    let img = image::RgbImage::from_raw(w, h, rgb)
-        .ok_or_else(|| Error::Failed("screenshot buffer has the wrong size".into()))?;
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::Failed(format!("cannot encode the screenshot: {e}")))?;
-    Ok(bytes.into_inner())
-}
-
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         if self.graphics.is_some() {
@@ -1049,58 +808,5 @@ impl ApplicationHandler for App {
         if let Some(g) = &self.graphics {
             g.window.request_redraw();
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn state() -> CameraState {
-        CameraState::from_settings(&CameraSettings {
-            position: DVec3::new(0.0, 1.2, 0.0),
-            look_at: DVec3::new(0.0, 1.2, 300.0),
-            up: DVec3::Y,
-            vertical_fov: 1.2,
-            width: 1280,
-            height: 720,
-        })
-    }
-
-    #[test]
-    fn the_scene_camera_round_trips() {
-        let s = state();
-        assert!((s.forward() - DVec3::Z).length() < 1e-12);
-        assert!((s.distance - 300.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn turning_follows_the_pointer_at_any_zoom() {
-        for fov in [60.0, 1.2, 0.05] {
-            let mut s = state();
-            s.fov = fov;
-            let cam = s.camera(1280, 720);
-            // A point at the image centre; drag by 100 px to the right: it must
-            // land 100 px right of the centre.
-            let p = cam.origin + cam.forward * 1000.0;
-            s.turn(100.0, 0.0, 720.0);
-            let (x, y) = s.camera(1280, 720).project(p).unwrap();
-            assert!((x - 740.0).abs() < 1.0, "fov {fov}: x = {x}");
-            assert!((y - 360.0).abs() < 0.5, "fov {fov}: y = {y}");
-        }
-    }
-
-    #[test]
-    fn orbit_keeps_the_target_and_zoom_is_bounded() {
-        let mut s = state();
-        s.orbit = true;
-        let target = s.position + s.forward() * s.distance;
-        s.turn(300.0, -50.0, 720.0);
-        let again = s.position + s.forward() * s.distance;
-        assert!((again - target).length() < 1e-9);
-        s.zoom(1000.0);
-        assert_eq!(s.fov, MIN_FOV);
-        s.zoom(-1000.0);
-        assert_eq!(s.fov, MAX_FOV);
     }
 }
