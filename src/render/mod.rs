@@ -527,6 +527,9 @@ pub struct CommandOptions {
     pub no_path_reuse: bool,
     /// No progress bar, no summary.
     pub quiet: bool,
+    /// The hit tolerance as a fraction of a pixel's footprint (default
+    /// [`RenderOptions::default`]'s); smaller for validation renders.
+    pub hit_fraction: Option<f64>,
 }
 
 /// `mirage render`: loads the scene, renders it and writes the PNG (and the
@@ -604,7 +607,20 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
             )
         })?,
     };
+    let default_hit = RenderOptions::default().hit_fraction;
+    let hit_fraction = match o.hit_fraction {
+        None => default_hit,
+        Some(f) if f.is_finite() && f > 0.0 && f <= 1.0 => f,
+        Some(f) => {
+            return Err(Error::input(
+                cli,
+                "--hit-fraction",
+                format!("must be in (0, 1] (fraction of a pixel), got {f}"),
+            ));
+        }
+    };
     let options = RenderOptions {
+        hit_fraction,
         shading: if o.albedo {
             Shading::Albedo
         } else {
