@@ -216,3 +216,26 @@ fn sky_rejects_bad_sizes_and_formats() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists() && !png.exists());
 }
+
+#[test]
+fn render_rejects_a_bad_hit_fraction() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/scenes/road.json");
+    let out = dir.path().join("r.png");
+    for bad in ["0", "1.5", "nan"] {
+        let o = mirage(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "--width",
+            "16",
+            "-o",
+            out.to_str().unwrap(),
+            "--hit-fraction",
+            bad,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", text(&o));
+        assert!(text(&o).contains("--hit-fraction"), "{}", text(&o));
+        assert!(!out.exists());
+    }
+}

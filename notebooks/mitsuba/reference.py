@@ -65,20 +65,22 @@ GROUND_HALF = 1.0e6
 
 
 def set_variant() -> str:
-    """The fastest variant that works here: llvm_ad_rgb (needs LLVM 19), else scalar_rgb."""
-    for v in ("llvm_ad_rgb", "scalar_rgb"):
-        try:
-            mi.set_variant(v)
-            return v
-        except Exception:  # noqa: BLE001 - a missing LLVM shows up as any error
-            continue
-    raise RuntimeError("no usable Mitsuba variant (llvm_ad_rgb needs libLLVM 19)")
+    """Mitsuba's llvm_ad_rgb variant (it needs LLVM 19). The scalar variants
+    would take hours with a Python integrator, and this code is written for
+    wide arrays (one lane per camera sample), so there is no fallback."""
+    try:
+        mi.set_variant("llvm_ad_rgb")
+    except Exception as e:  # noqa: BLE001 - a missing LLVM shows up as any error
+        raise RuntimeError(
+            "Mitsuba's llvm_ad_rgb variant is unavailable: it needs LLVM 19 "
+            "(apt-get install libllvm19; DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)"
+            f": {e}"
+        ) from e
+    return mi.variant()
 
 
 # The integrator class derives from a variant's class: choose the variant first.
-VARIANT = os.environ.get("MIRAGE_MITSUBA_VARIANT") or set_variant()
-if mi.variant() != VARIANT:
-    mi.set_variant(VARIANT)
+VARIANT = set_variant()
 
 
 class ExportError(ValueError):
@@ -258,11 +260,11 @@ def shapes_of(sdf: dict, xf, where: str) -> list[dict]:
             {"type": "sphere", "to_world": xf @ T().translate(_vec(b)) @ T().scale(r)},
         ]
         if np.linalg.norm(b - a) > 0:
-            out.append(
-                {"type": "cylinder", "p0": xf @ mi.ScalarPoint3f(*a), "p1": xf @ mi.ScalarPoint3f(*b), "radius": r}
-                if _is_rigid(xf)
-                else _fail(where, "capsule under a non-rigid transform")
-            )
+            # The transforms are rigid motions and uniform scales: the segment's
+            # ends map exactly, and the radius scales by the transform's factor.
+            factor = float(dr.norm(xf @ mi.ScalarVector3f(1, 0, 0)))
+            out.append({"type": "cylinder", "p0": xf @ mi.ScalarPoint3f(*a),
+                        "p1": xf @ mi.ScalarPoint3f(*b), "radius": r * factor})
         return out
     if t == "union":
         out = []
@@ -279,10 +281,6 @@ def shapes_of(sdf: dict, xf, where: str) -> list[dict]:
         return shapes_of(sdf["child"], xf @ T().scale(float(sdf["factor"])), f"{where}.child")
     _fail(where, f"shape type `{t}` has no exact Mitsuba counterpart "
           "(exportable: sphere, box, cylinder, capsule, union, translate, rotate, scale)")
-
-
-def _is_rigid(xf) -> bool:
-    return True  # translate/rotate/uniform scale only: cylinder endpoints map exactly
 
 
 def _fail(where, message):

@@ -619,8 +619,7 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
             ));
         }
     };
-    let options = RenderOptions {
-        hit_fraction,
+    let mut options = RenderOptions {
         shading: if o.albedo {
             Shading::Albedo
         } else {
@@ -635,6 +634,7 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
         progress: !o.quiet,
         ..RenderOptions::default()
     };
+    options.hit_fraction = hit_fraction;
     let renderer = Renderer::new(&scene, &options);
     let image = renderer.render();
     let tone = match options.shading {
