@@ -692,30 +692,21 @@ fn glare_from_spec(g: &GlareSpec, path: &Path) -> Result<Option<AngularGlare>> {
         Some(list) => {
             let mut out = Vec::with_capacity(list.len());
             for (i, k) in list.iter().enumerate() {
-                let (kernel, weight) = match *k {
+                let (kernel, weight, size, name) = match *k {
                     GlareKernelSpec::Gaussian { sigma, weight } => {
-                        let field = format!("glare.kernels[{i}].sigma");
-                        if !(sigma.is_finite() && sigma > 0.0 && sigma <= 90.0) {
-                            return Err(Error::input(
-                                path,
-                                field,
-                                format!("must be in (0, 90] degrees, got {sigma}"),
-                            ));
-                        }
-                        (glare::Kernel::Gaussian { sigma }, weight)
+                        (glare::Kernel::Gaussian { sigma }, weight, sigma, "sigma")
                     }
                     GlareKernelSpec::Compact { radius, weight } => {
-                        let field = format!("glare.kernels[{i}].radius");
-                        if !(radius.is_finite() && radius > 0.0 && radius <= 90.0) {
-                            return Err(Error::input(
-                                path,
-                                field,
-                                format!("must be in (0, 90] degrees, got {radius}"),
-                            ));
-                        }
-                        (glare::Kernel::Compact { radius }, weight)
+                        (glare::Kernel::Compact { radius }, weight, radius, "radius")
                     }
                 };
+                if !(size.is_finite() && size > 0.0 && size <= 90.0) {
+                    return Err(Error::input(
+                        path,
+                        format!("glare.kernels[{i}].{name}"),
+                        format!("must be in (0, 90] degrees, got {size}"),
+                    ));
+                }
                 if !(weight.is_finite() && (0.0..=1.0).contains(&weight)) {
                     return Err(Error::input(
                         path,
