@@ -1,6 +1,6 @@
 //! What a ray sees when it hits nothing: the sky, behind one interface, with
 //! two models: a cheap gradient and the physically based
-//! [`PhysicalSky`](super::atmosphere::PhysicalSky).
+//! [`PhysicalSky`].
 
 use super::atmosphere::{PhysicalSky, PhysicalSkySettings};
 use crate::scene::description::{SkySpec, Sun};
