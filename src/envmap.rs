@@ -148,7 +148,10 @@ pub fn sky_command(o: &SkyOptions) -> Result<f64> {
             ));
         }
     }
-    let sky = SkyModel::from_spec(&scene.sky);
+    // A map holds nothing finer than a texel: features the sky sizes by the
+    // pixel (the stars) are sized by the texel's height instead.
+    let texel_angle = PI / (height - 1) as f64;
+    let sky = SkyModel::from_spec(&scene.sky, &scene.sun, scene.camera.position.y, texel_angle);
     let map = bake(&sky, width, height);
     let error = lookup_error(&sky, &map, width, height, 2f64.to_radians());
     let bytes = crate::render::output::encode_exr(width, height, &map)?;

@@ -104,6 +104,9 @@ enum Command {
         /// Integrate every ray, even where a table of paths could be reused.
         #[arg(long)]
         no_path_reuse: bool,
+        /// Leave out the scene's veiling glare.
+        #[arg(long)]
+        no_glare: bool,
         /// No progress bar and no summary.
         #[arg(long, short)]
         quiet: bool,
@@ -207,6 +210,7 @@ fn main() -> ExitCode {
             height,
             tracer,
             no_path_reuse,
+            no_glare,
             quiet,
             hit_fraction,
         } => mirage::render::render_command(&mirage::render::CommandOptions {
@@ -220,6 +224,7 @@ fn main() -> ExitCode {
             height: *height,
             tracer: tracer.clone(),
             no_path_reuse: *no_path_reuse,
+            no_glare: *no_glare,
             quiet: *quiet,
             hit_fraction: *hit_fraction,
         })
