@@ -5,7 +5,9 @@ Cases (scene files in ``scenes/``):
 - ``straight``: mirage with ``--straight`` vs Mitsuba's **stock** integrators
   (aov albedo + path with max_depth 1), random pixel sampling: fully independent
   of mirage and of the custom integrator;
-- ``straight-custom``: the same scene, mirage ``--straight`` vs the custom
+- ``straight-physical``: straight rays under the physical sky (which varies
+  with azimuth too), against the stock integrators: the sky map's orientation;
+- ``straight-custom``: the straight scene, mirage ``--straight`` vs the custom
   integrator with δ ≡ 0 (checks the integrator's chord loop and sky lookup);
 - ``inferior``, ``superior``, ``hotspot``: mirage vs the custom curved-ray
   integrator (RK4 through the same medium, chords intersected by Mitsuba),
@@ -57,6 +59,7 @@ SKY_WIDTH, SKY_HEIGHT = 256, 8193
 CASES = [
     ("straight", "straight", ["--straight"], "stock", 256, 1024),
     ("straight-custom", "straight", ["--straight"], "custom-straight", 16, 16),
+    ("straight-physical", "straight-physical", ["--straight"], "stock", 256, 1024),
     ("inferior", "inferior", [], "custom", 16, 16),
     ("superior", "superior", [], "custom", 16, 16),
     ("hotspot", "hotspot", [], "custom", 16, 16),
