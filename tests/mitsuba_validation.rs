@@ -45,6 +45,7 @@ fn renders_match_mitsuba_references() {
         [
             "straight",
             "straight-custom",
+            "straight-physical",
             "inferior",
             "superior",
             "hotspot"

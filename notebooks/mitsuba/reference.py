@@ -3,7 +3,7 @@
 Mitsuba has no continuously varying refractive index, so the reference is built
 the faithful way: a custom integrator (:class:`CurvedRayIntegrator`, a
 ``mi.SamplingIntegrator``) bends each camera ray by RK4 through the same
-logistic medium (``/work/shared/spec/model.md``, read from the scene file), in
+logistic medium (the formulas of ``src/medium/logistic.rs``, read from the scene file), in
 the same τ form as mirage (dx/dτ = v, dv/dτ = n∇n, v = n·t), and lets Mitsuba
 intersect each straight chord between two steps with the scene. A ray that
 escapes sees the environment map that ``mirage sky`` exported, along its final
@@ -102,7 +102,7 @@ def load_scene(path: str | Path) -> dict:
 
 
 # ---------------------------------------------------------------------------
-# The medium, in drjit (model.md; the same formulas as src/medium/logistic.rs)
+# The medium, in drjit (the same formulas as src/medium/logistic.rs)
 
 
 def _sigmoid(t):
