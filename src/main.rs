@@ -110,7 +110,7 @@ enum Command {
         /// No progress bar and no summary.
         #[arg(long, short)]
         quiet: bool,
-        /// Hit tolerance as a fraction of a pixel (default 0.05; smaller: sharper edges, slower).
+        /// Hit tolerance as a fraction of a pixel (default 0.001; larger: faster, objects grow).
         #[arg(long)]
         hit_fraction: Option<f64>,
     },

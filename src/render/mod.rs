@@ -78,7 +78,10 @@ pub struct RenderOptions {
     pub height: Option<u32>,
     /// Draw a progress bar on stderr.
     pub progress: bool,
-    /// The hit tolerance as a fraction of a pixel's footprint.
+    /// The hit tolerance as a fraction of a pixel's footprint. Objects grow by
+    /// that much; the default 0.001 keeps edges where exact surfaces put them
+    /// (at 0.05, edge pixels of a 16-spp render differed from Mitsuba's in
+    /// 0.3–3.8 % of pixels) for 10–80 % more distance queries.
     pub hit_fraction: f64,
     /// Add the scene's veiling glare (if it has one) to lit renders.
     pub glare: bool,
@@ -95,7 +98,7 @@ impl Default for RenderOptions {
             width: None,
             height: None,
             progress: false,
-            hit_fraction: 0.05,
+            hit_fraction: 0.001,
             glare: true,
         }
     }
