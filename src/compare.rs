@@ -212,53 +212,16 @@ fn load_exr(path: &Path) -> Result<LinearImage> {
     })
 }
 
-/// Parses the bytes of a NumPy `.npy` file (format versions 1–3) holding an
-/// (H, W), (H, W, 3) or (H, W, 4) array of little-endian `f4`/`f8` or `u1`.
+/// Parses the bytes of a NumPy `.npy` file (read by the `npyz` crate) holding
+/// a C-ordered (H, W), (H, W, 3) or (H, W, 4) array of `f4`, `f8` or `u1`
+/// (either byte order).
 pub fn parse_npy(bytes: &[u8]) -> std::result::Result<LinearImage, String> {
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err("not a NumPy .npy file (bad magic)".into());
-    }
-    let (header_len, start) = match bytes[6] {
-        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
-        2 | 3 if bytes.len() >= 12 => (
-            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-            12,
-        ),
-        v => return Err(format!("unsupported .npy format version {v}")),
-    };
-    let header = bytes
-        .get(start..start + header_len)
-        .and_then(|h| std::str::from_utf8(h).ok())
-        .ok_or("truncated or non-text .npy header")?;
-    let field = |key: &str| -> std::result::Result<&str, String> {
-        let at = header
-            .find(&format!("'{key}'"))
-            .ok_or(format!("the .npy header has no '{key}'"))?;
-        let rest = header[at + key.len() + 2..].trim_start();
-        Ok(rest.strip_prefix(':').unwrap_or(rest).trim_start())
-    };
-    let descr = field("descr")?;
-    let descr = descr
-        .strip_prefix('\'')
-        .and_then(|d| d.split('\'').next())
-        .ok_or("cannot read the .npy dtype")?;
-    if field("fortran_order")?.starts_with("True") {
+    use npyz::{DType, Order, TypeChar};
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a readable .npy file: {e}"))?;
+    if npy.order() == Order::Fortran {
         return Err("Fortran-ordered arrays are not supported (save a C-ordered array)".into());
     }
-    let shape_text = field("shape")?;
-    let shape_text = shape_text
-        .strip_prefix('(')
-        .and_then(|s| s.split(')').next())
-        .ok_or("cannot read the .npy shape")?;
-    let shape: Vec<usize> = shape_text
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            s.parse::<usize>()
-                .map_err(|_| format!("bad shape entry `{s}`"))
-        })
-        .collect::<std::result::Result<_, _>>()?;
+    let shape: Vec<usize> = npy.shape().iter().map(|&d| d as usize).collect();
     let (h, w, c) = match shape[..] {
         [h, w] => (h, w, 1),
         [h, w, c] if c == 3 || c == 4 => (h, w, c),
@@ -268,33 +231,49 @@ pub fn parse_npy(bytes: &[u8]) -> std::result::Result<LinearImage, String> {
             ));
         }
     };
-    let (size, read): (usize, fn(&[u8]) -> f64) = match descr {
-        "<f4" => (4, |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
-        "<f8" => (8, |b| {
-            f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]])
-        }),
-        "|u1" | "<u1" => (1, |b| b[0] as f64 / 255.0),
+    let bad = |e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::UnexpectedEof => {
+            format!("truncated data: fewer values than the shape {shape:?} holds")
+        }
+        _ => format!("cannot read the .npy data: {e}"),
+    };
+    let values: Vec<f64> = match npy.dtype() {
+        DType::Plain(t) => match (t.type_char(), t.size_field()) {
+            (TypeChar::Float, 4) => npy
+                .into_vec::<f32>()
+                .map_err(bad)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (TypeChar::Float, 8) => npy.into_vec::<f64>().map_err(bad)?,
+            (TypeChar::Uint, 1) => npy
+                .into_vec::<u8>()
+                .map_err(bad)?
+                .into_iter()
+                .map(|v| v as f64 / 255.0)
+                .collect(),
+            _ => {
+                return Err(format!(
+                    "dtype `{t}`: expected float32 (<f4), float64 (<f8) or uint8 (|u1)"
+                ));
+            }
+        },
         other => {
             return Err(format!(
-                "dtype `{other}`: expected float32 (<f4), float64 (<f8) or uint8 (|u1)"
+                "dtype {other:?}: expected a plain float32, float64 or uint8 array"
             ));
         }
     };
-    let data = &bytes[start + header_len..];
-    let n = h * w * c;
-    if data.len() < n * size {
-        return Err(format!(
-            "truncated data: {} bytes for {n} values of {size} bytes",
-            data.len()
-        ));
+    if values.len() != h * w * c {
+        return Err(format!("{} values for shape {shape:?}", values.len()));
     }
-    let value = |i: usize| read(&data[i * size..(i + 1) * size]);
-    let pixels = (0..h * w)
-        .map(|p| {
+    let pixels = values
+        .chunks_exact(c)
+        .map(|v| {
             if c == 1 {
-                [value(p); 3]
+                [v[0]; 3]
             } else {
-                [value(p * c), value(p * c + 1), value(p * c + 2)]
+                [v[0], v[1], v[2]]
             }
         })
         .collect();
