@@ -7,6 +7,8 @@
 #![warn(missing_docs)]
 
 pub mod app;
+pub mod compare;
+pub mod envmap;
 pub mod error;
 pub mod fit;
 pub mod io;

@@ -104,9 +104,57 @@ enum Command {
         /// Integrate every ray, even where a table of paths could be reused.
         #[arg(long)]
         no_path_reuse: bool,
+        /// Leave out the scene's veiling glare.
+        #[arg(long)]
+        no_glare: bool,
         /// No progress bar and no summary.
         #[arg(long, short)]
         quiet: bool,
+        /// Hit tolerance as a fraction of a pixel (default 0.001; larger: faster, objects grow).
+        #[arg(long)]
+        hit_fraction: Option<f64>,
+    },
+    /// Compare an image with a reference: RMSE, PSNR, SSIM, share of pixels over a threshold.
+    Compare {
+        /// Our image (.png, .exr or .npy).
+        ours: PathBuf,
+        /// The reference image (.png, .exr or .npy).
+        reference: PathBuf,
+        /// A pixel differs when its largest channel difference exceeds this.
+        #[arg(long)]
+        threshold: Option<f64>,
+        /// Write the difference heat map here (.png).
+        #[arg(long)]
+        diff: Option<PathBuf>,
+        /// Write the metrics as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Fail (exit code 1) if the RMSE is above this.
+        #[arg(long)]
+        max_rmse: Option<f64>,
+        /// Fail if the PSNR (dB) is below this.
+        #[arg(long)]
+        min_psnr: Option<f64>,
+        /// Fail if the SSIM is below this.
+        #[arg(long)]
+        min_ssim: Option<f64>,
+        /// Fail if the share of pixels over the threshold (0 to 1) is above this.
+        #[arg(long)]
+        max_share_over: Option<f64>,
+    },
+    /// Write a scene's sky as a lat-long environment map (Mitsuba's envmap convention).
+    Sky {
+        /// Scene file (JSON).
+        scene: PathBuf,
+        /// Output (.exr).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Width in texels (default 1024).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Height in texels (default width / 2; taller maps are more accurate near the horizon).
+        #[arg(long)]
+        height: Option<u32>,
     },
     /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
     #[cfg(feature = "preview")]
@@ -195,7 +243,9 @@ fn main() -> ExitCode {
             height,
             tracer,
             no_path_reuse,
+            no_glare,
             quiet,
+            hit_fraction,
         } => mirage::render::render_command(&mirage::render::CommandOptions {
             scene: scene.clone(),
             output: output.clone(),
@@ -207,7 +257,9 @@ fn main() -> ExitCode {
             height: *height,
             tracer: tracer.clone(),
             no_path_reuse: *no_path_reuse,
+            no_glare: *no_glare,
             quiet: *quiet,
+            hit_fraction: *hit_fraction,
         })
         .map(|_| ()),
         #[cfg(feature = "preview")]
@@ -247,6 +299,42 @@ fn main() -> ExitCode {
             plot.as_deref(),
             !no_fit,
         )
+        .map(|_| ()),
+        Command::Compare {
+            ours,
+            reference,
+            threshold,
+            diff,
+            json,
+            max_rmse,
+            min_psnr,
+            min_ssim,
+            max_share_over,
+        } => mirage::compare::compare_command(&mirage::compare::CompareOptions {
+            ours: ours.clone(),
+            reference: reference.clone(),
+            threshold: *threshold,
+            diff: diff.clone(),
+            json: json.clone(),
+            limits: mirage::compare::Limits {
+                max_rmse: *max_rmse,
+                min_psnr: *min_psnr,
+                min_ssim: *min_ssim,
+                max_share_over: *max_share_over,
+            },
+        })
+        .map(|_| ()),
+        Command::Sky {
+            scene,
+            output,
+            width,
+            height,
+        } => mirage::envmap::sky_command(&mirage::envmap::SkyOptions {
+            scene: scene.clone(),
+            output: output.clone(),
+            width: *width,
+            height: *height,
+        })
         .map(|_| ()),
     };
     match result {

@@ -195,11 +195,54 @@ fn bad_scenes_are_refused_with_file_and_field() {
         &["sun.elevation"],
     );
     rejects(
-        &with("sky", r#"{"type": "physical"}"#),
+        &with("sky", r#"{"type": "spectral"}"#),
         &[],
         &png,
-        &["sky", "physical"],
+        &["sky", "spectral"],
     );
+    rejects(
+        &with("sky", r#"{"type": "physical", "mie_scale": -1}"#),
+        &[],
+        &png,
+        &["sky.mie_scale", "[0, 1000]"],
+    );
+    rejects(
+        &with("sky", r#"{"type": "physical", "haze": 2}"#),
+        &[],
+        &png,
+        &["sky", "unknown field `haze`"],
+    );
+    rejects(
+        &with(
+            "glare",
+            r#"{"kernels": [{"type": "gaussian", "sigma": 0.1, "weight": 1.5}]}"#,
+        ),
+        &[],
+        &png,
+        &["glare.kernels[0].weight", "[0, 1]"],
+    );
+    rejects(
+        &with(
+            "glare",
+            r#"{"kernels": [{"type": "compact", "radius": 0, "weight": 0.1}]}"#,
+        ),
+        &[],
+        &png,
+        &["glare.kernels[0].radius", "(0, 90]"],
+    );
+    rejects(
+        &with("glare", r#"{"strength": 400}"#),
+        &[],
+        &png,
+        &["glare.strength", "≤ 1"],
+    );
+    rejects(
+        &with("glare", r#"{"epsilon": 0.5}"#),
+        &[],
+        &png,
+        &["glare.epsilon"],
+    );
+    rejects(&with("exposure", "0"), &[], &png, &["exposure", "> 0"]);
     rejects(
         &with("samples_per_pixel", "0"),
         &[],

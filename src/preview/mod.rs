@@ -112,6 +112,8 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
         sky: None,
         samples_per_pixel: None,
         trace: Default::default(),
+        exposure: None,
+        glare: None,
     };
     Scene::from_file(file, path)
 }
@@ -136,7 +138,17 @@ pub fn render_frame(
     let buffers =
         pack(scene, medium, view).map_err(|e| Error::input(&scene.source, e.field, e.message))?;
     let tracer = Tracer::new(gpu, &buffers);
-    tracer.render_to_cpu(gpu).map_err(Error::Failed)
+    let mut pixels = tracer.render_to_cpu(gpu).map_err(Error::Failed)?;
+    // Veiling glare is a post-process on the linear image: applied here on
+    // the CPU, as `mirage render` does (the window shows frames without it).
+    if let Some(g) = &scene.glare
+        && view.shading == Shading::Lit
+    {
+        let (w, h) = (view.camera.width, view.camera.height);
+        let settings = g.in_pixels(view.camera.pixel_angle());
+        crate::render::glare::apply(&mut pixels, w, h, &settings);
+    }
+    Ok(pixels)
 }
 
 /// The arguments of `mirage preview`.
@@ -298,7 +310,9 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
         let view = View::of_scene(scene, &options, w, h);
         let pixels = render_frame(&gpu, scene, &scene.medium, &view)?;
         let tone = match options.shading {
-            Shading::Lit => ToneMap::Filmic { exposure: 1.0 },
+            Shading::Lit => ToneMap::Filmic {
+                exposure: scene.exposure,
+            },
             Shading::Albedo => ToneMap::Clamp,
         };
         let png = encode_png(w, h, &pixels, tone)?;

@@ -546,6 +546,13 @@ pub fn pack(
     medium: &LogisticMedium,
     view: &View,
 ) -> Result<SceneBuffers, PackError> {
+    // As the CPU renderer: seen from the scene camera's altitude.
+    let sky = SkyModel::from_spec(
+        &scene.sky,
+        &scene.sun,
+        scene.camera.position.y,
+        view.camera.pixel_angle(),
+    );
     let objects_box = Aabb::of_objects(&scene.objects);
     let air = Air::new(
         medium,
@@ -561,7 +568,7 @@ pub fn pack(
         objects: records,
         nodes,
         profile: Vec::new(),
-        sky: bake_sky(&SkyModel::from_spec(&scene.sky)),
+        sky: bake_sky(&sky),
         cells: Vec::new(),
         near: Vec::new(),
     };
@@ -632,7 +639,6 @@ pub fn pack(
         }
         None => p.box_min[3] = 0.0,
     }
-    let sky = SkyModel::from_spec(&scene.sky);
     let t = sky.sun_transmittance();
     let sun = &scene.sun;
     p.sun_dir = v4(sun.direction, 0.0);
@@ -827,9 +833,9 @@ mod tests {
 
     #[test]
     fn the_sky_table_has_the_horizon_row() {
-        let sky = SkyModel::from_spec(&crate::scene::description::SkySpec::Gradient {
-            zenith: None,
-            horizon: None,
+        let sky = SkyModel::Gradient(crate::render::sky::GradientSky {
+            zenith: crate::render::sky::DEFAULT_ZENITH,
+            horizon: crate::render::sky::DEFAULT_HORIZON,
         });
         let t = bake_sky(&sky);
         let mid = (SKY_HEIGHT / 2 * SKY_WIDTH) as usize;

@@ -154,7 +154,9 @@ fn halfline_meets_box_xz(o: vec2<f32>, h: vec2<f32>) -> bool {
 // Fate: 0 undecided, 1 sky (along `dir`), 2 bound for the ground.
 struct Fate { kind: u32, dir: vec3<f32> }
 
-fn fate(p: vec3<f32>, v: vec3<f32>) -> Fate {
+// `objects`: whether the objects still count (not for a ray given up at the
+// largest distance, which sees the sky along its asymptote: Air::sky_direction).
+fn fate(p: vec3<f32>, v: vec3<f32>, objects: bool) -> Fate {
     var f = Fate(0u, vec3<f32>(0.0));
     if (P.flags.y == 1u || p.y < 0.0 || v.y == 0.0 || in_zone(p)) { return f; }
     let vn = normalize(v);
@@ -183,7 +185,7 @@ fn fate(p: vec3<f32>, v: vec3<f32>) -> Fate {
     var h = vec2<f32>(0.0);
     if (lh > 0.0) { h = vh / lh; }
     let o = p.xz;
-    if (P.box_min.w > 0.5 && low <= P.box_max.y && high >= P.box_min.y && halfline_meets_box_xz(o, h)) {
+    if (objects && P.box_min.w > 0.5 && low <= P.box_max.y && high >= P.box_min.y && halfline_meets_box_xz(o, h)) {
         return f;
     }
     for (var j = 0u; j < P.size.z; j++) {
@@ -450,8 +452,15 @@ fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
 // Outcome: kind 0 sky (dir), 1 object (index, point, distance), 2 ground (point).
 struct Outcome { kind: u32, index: u32, point: vec3<f32>, dir: vec3<f32>, distance: f32 }
 
-fn tolerance(s: f32) -> f32 {
-    return max(P.tolerance.x, P.tolerance.y * s);
+// f32 resolves positions to ~6e-8 of their size, and distances computed from
+// them no better: the hit tolerance (and the shading offsets built on it)
+// never go below a few of those steps, or rays would creep toward surfaces
+// through rounding noise (the CPU's f64 has no such floor).
+const F32_FLOOR: f32 = 5e-7;
+
+fn tolerance(s: f32, p: vec3<f32>) -> f32 {
+    let size = max(s, max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    return max(max(P.tolerance.x, P.tolerance.y * s), F32_FLOOR * size);
 }
 
 fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
@@ -478,12 +487,12 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
             let q = scene_distance(p);
             queries += 1u;
             let arc = seg.s0 + theta * (seg.s1 - seg.s0);
-            if (q.x < tolerance(arc) || queries >= P.counts.w) {
+            if (q.x < tolerance(arc, p) || queries >= P.counts.w) {
                 var index = q.y;
                 if (index < 0.0) { index = all_objects_distance(p).y; }
                 return Outcome(1u, u32(index), p, normalize(v), arc);
             }
-            let f = fate(p, v);
+            let f = fate(p, v, true);
             if (f.kind == 1u) { return Outcome(0u, 0u, p, f.dir, arc); }
             if (f.kind == 2u) {
                 free = true;
@@ -514,7 +523,12 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
         if (seg.s1 >= max_distance) {
             let t_max = clamp((max_distance - seg.s0) / (seg.s1 - seg.s0), 0.0, 1.0);
             if (t_max <= goal) {
-                return Outcome(0u, 0u, seg.x1, normalize(hermite_v(seg, t_max)), max_distance);
+                let e = hermite(seg, t_max);
+                let v = hermite_v(seg, t_max);
+                let f = fate(e[0], v, false);
+                var dir = normalize(v);
+                if (f.kind == 1u) { dir = f.dir; }
+                return Outcome(0u, 0u, e[0], dir, max_distance);
             }
         }
         theta = goal;
@@ -586,7 +600,7 @@ fn shade(o: Outcome) -> vec3<f32> {
         let albedo = objects[o.index].albedo.xyz;
         if (albedo_only) { return albedo; }
         let n = object_normal(o.index, o.point);
-        let eps = max(P.tolerance.x, P.tolerance.y * o.distance);
+        let eps = tolerance(o.distance, o.point);
         return light(o.point + n * (2.0 * eps + 1e-4), n, albedo);
     }
     let albedo = ground_albedo(o.point.x, o.point.z);

@@ -146,6 +146,7 @@ impl App {
             .map(|p| editing::pair_distances(p, &medium))
             .unwrap_or_default();
         let save_path = editing::edited_path(&input.path).display().to_string();
+        let exposure = input.scene.exposure as f32;
         App {
             camera: CameraState::from_settings(&input.scene.camera),
             input,
@@ -162,7 +163,7 @@ impl App {
             straight,
             spp: 1,
             render_scale: 1,
-            exposure: 1.0,
+            exposure,
             edit_hot_spots: false,
             drag: None,
             distances,

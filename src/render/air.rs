@@ -387,6 +387,24 @@ impl Air {
     /// The fate of a ray at `p` with ray vector `v` (= n·t), if it is already
     /// decided: see the module documentation. `None`: keep integrating.
     pub fn fate(&self, p: DVec3, v: DVec3) -> Option<Fate> {
+        self.fate_past(p, v, true)
+    }
+
+    /// The direction in which a ray given up on at `p` (at the largest
+    /// distance) sees the sky: where it will leave the model if its fate is
+    /// decided once objects no longer count (it can only climb away, or it
+    /// dips and climbs through stratified air), else its direction here.
+    /// Using the limiting direction keeps the sky of a ray independent of
+    /// where along its escape the tracer happened to stop.
+    pub fn sky_direction(&self, p: DVec3, v: DVec3) -> DVec3 {
+        match self.fate_past(p, v, false) {
+            Some(Fate::Sky(direction)) => direction,
+            _ => v.normalize(),
+        }
+    }
+
+    /// [`Air::fate`], with or without regard to the objects.
+    fn fate_past(&self, p: DVec3, v: DVec3, objects: bool) -> Option<Fate> {
         if p.y < 0.0 || v.y == 0.0 || self.in_zone(p) {
             return None;
         }
@@ -411,6 +429,7 @@ impl Air {
         let h = if c > 0.0 { vh / c } else { DVec2::ZERO };
         let origin = DVec2::new(p.x, p.z);
         if let Some(b) = &self.objects
+            && objects
             && low <= b.max.y
             && high >= b.min.y
             && b.halfline_meets_xz(origin, h)

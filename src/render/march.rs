@@ -517,7 +517,7 @@ impl RayPath for CurvedPath<'_, '_> {
                 return Advance::End {
                     at: (t_max - self.theta).max(0.0) * self.arc_per_theta,
                     outcome: Outcome::Sky {
-                        direction: dvec(st.v).normalize(),
+                        direction: m.air.sky_direction(dvec(st.x), dvec(st.v)),
                     },
                 };
             }

@@ -22,7 +22,9 @@
 
 pub mod accel;
 pub mod air;
+pub mod atmosphere;
 pub mod camera;
+pub mod glare;
 pub mod march;
 pub mod output;
 pub mod paths;
@@ -76,8 +78,13 @@ pub struct RenderOptions {
     pub height: Option<u32>,
     /// Draw a progress bar on stderr.
     pub progress: bool,
-    /// The hit tolerance as a fraction of a pixel's footprint.
+    /// The hit tolerance as a fraction of a pixel's footprint. Objects grow by
+    /// that much; the default 0.001 keeps edges where exact surfaces put them
+    /// (at 0.05, edge pixels of a 16-spp render differed from Mitsuba's in
+    /// 0.3–3.8 % of pixels) for 10–80 % more distance queries.
     pub hit_fraction: f64,
+    /// Add the scene's veiling glare (if it has one) to lit renders.
+    pub glare: bool,
 }
 
 impl Default for RenderOptions {
@@ -91,7 +98,8 @@ impl Default for RenderOptions {
             width: None,
             height: None,
             progress: false,
-            hit_fraction: 0.05,
+            hit_fraction: 0.001,
+            glare: true,
         }
     }
 }
@@ -115,6 +123,8 @@ pub struct RenderStats {
     pub grid_seconds: f64,
     /// Seconds spent tracing and shading.
     pub trace_seconds: f64,
+    /// The veiling glare's sources and cost, if applied.
+    pub glare: Option<glare::GlareStats>,
 }
 
 /// A rendered image: linear HDR RGB, row-major, top row first.
@@ -206,7 +216,12 @@ impl Renderer {
             camera,
             air,
             distance,
-            sky: SkyModel::from_spec(&scene.sky),
+            sky: SkyModel::from_spec(
+                &scene.sky,
+                &scene.sun,
+                scene.camera.position.y,
+                camera.pixel_angle(),
+            ),
             table: None,
             samples,
             setup,
@@ -378,8 +393,9 @@ impl Renderer {
             0.0
         };
         let ambient = self.sky.ambient();
+        let through = self.sky.sun_transmittance();
         let hemi = 0.5 + 0.5 * n.y;
-        [0, 1, 2].map(|c| albedo[c] * (sun.irradiance[c] * direct + ambient[c] * hemi))
+        [0, 1, 2].map(|c| albedo[c] * (sun.irradiance[c] * through[c] * direct + ambient[c] * hemi))
     }
 
     /// Whether the straight ray from `p` toward the sun meets no object.
@@ -452,6 +468,13 @@ impl Renderer {
             stats.shadow += s.shadow;
         }
         stats.trace_seconds = start.elapsed().as_secs_f64();
+        if let Some(g) = &self.scene.glare
+            && self.options.glare
+            && self.options.shading == Shading::Lit
+        {
+            let settings = g.in_pixels(self.camera.pixel_angle());
+            stats.glare = Some(glare::apply(&mut pixels, w, h, &settings));
+        }
         Rendered {
             width: w,
             height: h,
@@ -527,6 +550,11 @@ pub struct CommandOptions {
     pub no_path_reuse: bool,
     /// No progress bar, no summary.
     pub quiet: bool,
+    /// The hit tolerance as a fraction of a pixel's footprint (default
+    /// [`RenderOptions::default`]'s); smaller for validation renders.
+    pub hit_fraction: Option<f64>,
+    /// Leave the scene's glare out.
+    pub no_glare: bool,
 }
 
 /// `mirage render`: loads the scene, renders it and writes the PNG (and the
@@ -604,7 +632,19 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
             )
         })?,
     };
-    let options = RenderOptions {
+    let default_hit = RenderOptions::default().hit_fraction;
+    let hit_fraction = match o.hit_fraction {
+        None => default_hit,
+        Some(f) if f.is_finite() && f > 0.0 && f <= 1.0 => f,
+        Some(f) => {
+            return Err(Error::input(
+                cli,
+                "--hit-fraction",
+                format!("must be in (0, 1] (fraction of a pixel), got {f}"),
+            ));
+        }
+    };
+    let mut options = RenderOptions {
         shading: if o.albedo {
             Shading::Albedo
         } else {
@@ -617,12 +657,16 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
         width,
         height,
         progress: !o.quiet,
+        glare: !o.no_glare,
         ..RenderOptions::default()
     };
+    options.hit_fraction = hit_fraction;
     let renderer = Renderer::new(&scene, &options);
     let image = renderer.render();
     let tone = match options.shading {
-        Shading::Lit => output::ToneMap::Filmic { exposure: 1.0 },
+        Shading::Lit => output::ToneMap::Filmic {
+            exposure: scene.exposure,
+        },
         Shading::Albedo => output::ToneMap::Clamp,
     };
     let png = output::encode_png(image.width, image.height, &image.pixels, tone)?;
@@ -674,6 +718,12 @@ pub fn summary(renderer: &Renderer, image: &Rendered) -> String {
         per(s.march.rk4_steps),
         per(s.shadow.object_evaluations),
     );
+    if let Some(g) = &s.glare {
+        out.push_str(&format!(
+            "\nglare: {} source pixels, {}×{} orders ({} coefficients), {:.3} s",
+            g.sources, g.orders.0, g.orders.1, g.coefficients, g.seconds
+        ));
+    }
     if let Some(t) = &s.table {
         out.push_str(&format!(
             "\npath table: {} paths, {} RK4 steps, built in {:.3} s; interpolation error ≤ {:.4} px (estimated); {} of {} samples on the table",

@@ -1,8 +1,9 @@
-//! What a ray sees when it hits nothing: the sky, behind one interface so that
-//! a physical sky (Rayleigh/Mie scattering) can replace the gradient without
-//! touching the tracer.
+//! What a ray sees when it hits nothing: the sky, behind one interface, with
+//! two models: a cheap gradient and the physically based
+//! [`PhysicalSky`].
 
-use crate::scene::description::SkySpec;
+use super::atmosphere::{PhysicalSky, PhysicalSkySettings};
+use crate::scene::description::{SkySpec, Sun};
 use glam::DVec3;
 
 /// Radiance arriving from a direction that meets no surface.
@@ -77,22 +78,55 @@ impl Sky for GradientSky {
     }
 }
 
-/// The sky models a scene can name (one for now; a physical sky will be the
-/// next variant).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The sky models a scene can name.
+#[derive(Clone, Debug)]
 pub enum SkyModel {
     /// [`GradientSky`].
     Gradient(GradientSky),
+    /// [`PhysicalSky`]: Rayleigh and Mie single scattering, ozone, the sun's
+    /// disc and stars.
+    Physical(Box<PhysicalSky>),
 }
 
 impl SkyModel {
-    /// The model a scene's `sky` section describes.
-    pub fn from_spec(spec: &SkySpec) -> SkyModel {
+    /// The model a scene's `sky` section describes, lit by `sun` and seen
+    /// from `observer_altitude` metres by a camera whose pixels subtend
+    /// `pixel_angle` radians.
+    pub fn from_spec(
+        spec: &SkySpec,
+        sun: &Sun,
+        observer_altitude: f64,
+        pixel_angle: f64,
+    ) -> SkyModel {
         match spec {
             SkySpec::Gradient { zenith, horizon } => SkyModel::Gradient(GradientSky {
                 zenith: zenith.unwrap_or(DEFAULT_ZENITH),
                 horizon: horizon.unwrap_or(DEFAULT_HORIZON),
             }),
+            SkySpec::Physical {
+                rayleigh_scale,
+                mie_scale,
+                ozone,
+                sun_disc,
+                stars,
+                star_brightness,
+            } => {
+                let d = PhysicalSkySettings::default();
+                let settings = PhysicalSkySettings {
+                    rayleigh_scale: rayleigh_scale.unwrap_or(d.rayleigh_scale),
+                    mie_scale: mie_scale.unwrap_or(d.mie_scale),
+                    ozone: ozone.unwrap_or(d.ozone),
+                    sun_disc: sun_disc.unwrap_or(d.sun_disc),
+                    stars: stars.unwrap_or(d.stars),
+                    star_brightness: star_brightness.unwrap_or(d.star_brightness),
+                };
+                SkyModel::Physical(Box::new(PhysicalSky::new(
+                    &settings,
+                    sun,
+                    observer_altitude,
+                    pixel_angle,
+                )))
+            }
         }
     }
 }
@@ -102,11 +136,31 @@ impl Sky for SkyModel {
     fn radiance(&self, dir: DVec3) -> [f64; 3] {
         match self {
             SkyModel::Gradient(g) => g.radiance(dir),
+            SkyModel::Physical(p) => p.radiance(dir),
         }
     }
     fn ambient(&self) -> [f64; 3] {
         match self {
             SkyModel::Gradient(g) => g.ambient(),
+            SkyModel::Physical(p) => p.ambient(),
+        }
+    }
+    fn diffuse(&self, dir: DVec3) -> [f64; 3] {
+        match self {
+            SkyModel::Gradient(g) => g.diffuse(dir),
+            SkyModel::Physical(p) => p.diffuse(dir),
+        }
+    }
+    fn sun_transmittance(&self) -> [f64; 3] {
+        match self {
+            SkyModel::Gradient(g) => g.sun_transmittance(),
+            SkyModel::Physical(p) => p.sun_transmittance(),
+        }
+    }
+    fn sun_disc(&self) -> Option<SunDisc> {
+        match self {
+            SkyModel::Gradient(g) => g.sun_disc(),
+            SkyModel::Physical(p) => p.sun_disc(),
         }
     }
 }

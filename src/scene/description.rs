@@ -25,7 +25,9 @@
 //! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
 //! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
 //! | `sun` | `elevation`, `azimuth` (degrees; azimuth from +z toward +x), `irradiance` (default 3.5, linear units), `color` (default white) |
-//! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional) |
+//! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional), or `{"type": "physical", ...}`: Rayleigh + Mie single scattering with ozone, sun disc and stars (options in [`crate::render::atmosphere`]) |
+//! | `glare` | veiling glare of the sun and its mirage images: `enabled`, `strength`, `threshold`, `epsilon`, `kernels` ([`crate::render::glare`]); absent: none |
+//! | `exposure` | multiplies the radiance before tone mapping (default 1) |
 //! | `samples_per_pixel` | default 1 (the pixel centre); more: a low-discrepancy pattern inside the pixel |
 //! | `trace` | `step`: the RK4 step (metres, default 4), `max_distance`: the arc length after which a ray sees the sky along its final direction (metres, default 20000) |
 //!
@@ -36,6 +38,7 @@ use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
 use crate::io::problem::{parse_json, read_input};
 use crate::medium::LogisticMedium;
+use crate::render::glare::{self, AngularGlare};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -138,6 +141,69 @@ pub enum SkySpec {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         horizon: Option<[f64; 3]>,
     },
+    /// Rayleigh and Mie single scattering with ozone, the sun's disc and
+    /// stars ([`crate::render::atmosphere`]).
+    Physical {
+        /// Multiplies the molecular density (default 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rayleigh_scale: Option<f64>,
+        /// Multiplies the aerosol density: haze (default 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mie_scale: Option<f64>,
+        /// Ozone absorption (default true).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ozone: Option<bool>,
+        /// Draw the sun's disc (default true).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sun_disc: Option<bool>,
+        /// Stars at night (default true).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        stars: Option<bool>,
+        /// Multiplies the stars' flux (default 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        star_brightness: Option<f64>,
+    },
+}
+
+/// One kernel of the `glare` section as written (sizes in degrees).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum GlareKernelSpec {
+    /// A Gaussian of standard deviation `sigma` degrees.
+    Gaussian {
+        /// Standard deviation (degrees).
+        sigma: f64,
+        /// Fraction of a source's light it spreads.
+        weight: f64,
+    },
+    /// (1 − u²/r²)³ within `radius` degrees.
+    Compact {
+        /// Radius (degrees).
+        radius: f64,
+        /// Fraction of a source's light it spreads.
+        weight: f64,
+    },
+}
+
+/// The `glare` section as written ([`crate::render::glare`]).
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlareSpec {
+    /// On/off (default on).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub enabled: Option<bool>,
+    /// Multiplies every kernel's weight (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<f64>,
+    /// Luminance above which a pixel is a source (default 20).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
+    /// Truncation error relative to the sources' peaks (default 1e-3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon: Option<f64>,
+    /// The kernels (default: bloom, veil and halo).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernels: Option<Vec<GlareKernelSpec>>,
 }
 
 /// The `trace` section as written.
@@ -182,6 +248,12 @@ pub struct SceneFile {
     /// The sky.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sky: Option<SkySpec>,
+    /// Veiling glare of bright sources (none if absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glare: Option<GlareSpec>,
+    /// Multiplies the radiance before tone mapping (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exposure: Option<f64>,
     /// Samples per pixel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples_per_pixel: Option<u32>,
@@ -268,6 +340,10 @@ pub struct Scene {
     pub sun: Sun,
     /// The sky model, as written (validated).
     pub sky: SkySpec,
+    /// Veiling glare, if on.
+    pub glare: Option<AngularGlare>,
+    /// Multiplies the radiance before tone mapping.
+    pub exposure: f64,
     /// Samples per pixel (≥ 1).
     pub samples_per_pixel: u32,
     /// RK4 step (metres, > 0).
@@ -518,7 +594,34 @@ impl Scene {
                     check_rgb(path, "sky.horizon", *h, None)?;
                 }
             }
+            SkySpec::Physical {
+                rayleigh_scale,
+                mie_scale,
+                star_brightness,
+                ..
+            } => {
+                for (field, v, upper) in [
+                    ("sky.rayleigh_scale", rayleigh_scale, 100.0),
+                    ("sky.mie_scale", mie_scale, 1000.0),
+                    ("sky.star_brightness", star_brightness, 1e12),
+                ] {
+                    if let Some(v) = v
+                        && !(v.is_finite() && (0.0..=upper).contains(v))
+                    {
+                        return Err(Error::input(
+                            path,
+                            field,
+                            format!("must be a number in [0, {upper}], got {v}"),
+                        ));
+                    }
+                }
+            }
         }
+        let glare = match &file.glare {
+            None => None,
+            Some(g) => glare_from_spec(g, path)?,
+        };
+        let exposure = positive(path, "exposure", file.exposure.unwrap_or(1.0))?;
         let samples_per_pixel = file.samples_per_pixel.unwrap_or(1);
         if samples_per_pixel == 0 || samples_per_pixel > MAX_SAMPLES_PER_PIXEL {
             return Err(Error::input(
@@ -549,11 +652,95 @@ impl Scene {
             objects: file.objects,
             sun,
             sky,
+            glare,
+            exposure,
             samples_per_pixel,
             step,
             max_distance,
         })
     }
+}
+
+/// Checks a `glare` section; `None` when it is switched off.
+fn glare_from_spec(g: &GlareSpec, path: &Path) -> Result<Option<AngularGlare>> {
+    if g.enabled == Some(false) {
+        return Ok(None);
+    }
+    let strength = g.strength.unwrap_or(1.0);
+    if !(strength.is_finite() && strength >= 0.0) {
+        return Err(Error::input(
+            path,
+            "glare.strength",
+            format!("must be a finite number ≥ 0, got {strength}"),
+        ));
+    }
+    let threshold = positive(
+        path,
+        "glare.threshold",
+        g.threshold.unwrap_or(glare::DEFAULT_THRESHOLD),
+    )?;
+    let epsilon = g.epsilon.unwrap_or(glare::DEFAULT_EPSILON);
+    if !(epsilon.is_finite() && (1e-8..=0.1).contains(&epsilon)) {
+        return Err(Error::input(
+            path,
+            "glare.epsilon",
+            format!("must be in [1e-8, 0.1], got {epsilon}"),
+        ));
+    }
+    let kernels = match &g.kernels {
+        None => glare::default_kernels(),
+        Some(list) => {
+            let mut out = Vec::with_capacity(list.len());
+            for (i, k) in list.iter().enumerate() {
+                let (kernel, weight, size, name) = match *k {
+                    GlareKernelSpec::Gaussian { sigma, weight } => {
+                        (glare::Kernel::Gaussian { sigma }, weight, sigma, "sigma")
+                    }
+                    GlareKernelSpec::Compact { radius, weight } => {
+                        (glare::Kernel::Compact { radius }, weight, radius, "radius")
+                    }
+                };
+                if !(size.is_finite() && size > 0.0 && size <= 90.0) {
+                    return Err(Error::input(
+                        path,
+                        format!("glare.kernels[{i}].{name}"),
+                        format!("must be in (0, 90] degrees, got {size}"),
+                    ));
+                }
+                if !(weight.is_finite() && (0.0..=1.0).contains(&weight)) {
+                    return Err(Error::input(
+                        path,
+                        format!("glare.kernels[{i}].weight"),
+                        format!("must be in [0, 1], got {weight}"),
+                    ));
+                }
+                out.push(glare::WeightedKernel { kernel, weight });
+            }
+            out
+        }
+    };
+    let kernels: Vec<glare::WeightedKernel> = kernels
+        .into_iter()
+        .map(|k| glare::WeightedKernel {
+            weight: k.weight * strength,
+            ..k
+        })
+        .collect();
+    let total: f64 = kernels.iter().map(|k| k.weight).sum();
+    if total > 1.0 {
+        return Err(Error::input(
+            path,
+            "glare.strength",
+            format!(
+                "the kernels would spread {total:.3} of a source's light (strength × Σ weights must be ≤ 1)"
+            ),
+        ));
+    }
+    Ok(Some(AngularGlare {
+        kernels,
+        threshold,
+        epsilon,
+    }))
 }
 
 /// Only the `medium` field of a result (or problem) file; every other field is
