@@ -320,6 +320,31 @@ mod tests {
     }
 
     #[test]
+    fn the_background_fit_reports_progress_and_lands_the_pairs() {
+        let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
+        let problem = Problem::load(&input).unwrap();
+        let before = pair_distances(&problem, &problem.medium);
+        let job = FitJob::start(&problem, &problem.medium);
+        let start = std::time::Instant::now();
+        let progress = loop {
+            let p = job.progress();
+            if p.done.is_some() {
+                break p;
+            }
+            assert!(start.elapsed().as_secs() < 120, "the fit did not finish");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        assert!(progress.iterations > 0);
+        let fitted = progress.done.unwrap().unwrap();
+        let after = pair_distances(&problem, &fitted);
+        let worst = after.iter().cloned().fold(0.0, f64::max);
+        assert!(
+            worst < 1e-6 && before.iter().cloned().fold(0.0, f64::max) > 1e-3,
+            "before {before:?}, after {after:?}"
+        );
+    }
+
+    #[test]
     fn saving_replaces_the_medium_and_keeps_the_rest() {
         let dir = tempfile::tempdir().unwrap();
         let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
