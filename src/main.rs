@@ -188,6 +188,9 @@ enum Command {
         /// Save the window (frame and panels) here when it closes (.png).
         #[arg(long)]
         screenshot: Option<PathBuf>,
+        /// Leave out the scene's veiling glare.
+        #[arg(long)]
+        no_glare: bool,
     },
 }
 
@@ -274,6 +277,7 @@ fn main() -> ExitCode {
             bench,
             frames,
             screenshot,
+            no_glare,
         } => mirage::preview::preview_command(&mirage::preview::PreviewOptions {
             input: input.clone(),
             headless: *headless,
@@ -285,6 +289,7 @@ fn main() -> ExitCode {
             bench: *bench,
             frames: *frames,
             screenshot: screenshot.clone(),
+            no_glare: *no_glare,
         }),
         Command::Tradeoff {
             problem,

@@ -119,7 +119,8 @@ fn output_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Textu
         format: wgpu::TextureFormat::Rgba32Float,
         usage: wgpu::TextureUsages::STORAGE_BINDING
             | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     })
 }
@@ -387,6 +388,44 @@ impl Tracer {
 
     /// Traces one frame and reads it back: linear RGB, row-major, top row first.
     pub fn render_to_cpu(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, String> {
+        self.read(gpu, true)
+    }
+
+    /// Reads back the frame last traced, without tracing again.
+    pub fn read_back(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, String> {
+        self.read(gpu, false)
+    }
+
+    /// Replaces the linear image with `pixels` (linear RGB, row-major, top row
+    /// first, the image's size): how a frame post-processed on the CPU (the
+    /// glare) gets back to the display pass.
+    pub fn upload(&self, gpu: &Gpu, pixels: &[[f32; 3]]) {
+        let (w, h) = (self.width, self.height);
+        assert_eq!(pixels.len(), (w * h) as usize, "upload of the wrong size");
+        let rgba: Vec<[f32; 4]> = pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.output,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&rgba),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16 * w),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// Reads the linear image back, after tracing it first if `trace`.
+    fn read(&self, gpu: &Gpu, trace: bool) -> Result<Vec<[f32; 3]>, String> {
         let (w, h) = (self.width, self.height);
         let row = (16 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
             * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -399,7 +438,9 @@ impl Tracer {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        self.dispatch(&mut encoder);
+        if trace {
+            self.dispatch(&mut encoder);
+        }
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
                 texture: &self.output,

@@ -139,16 +139,27 @@ pub fn render_frame(
         pack(scene, medium, view).map_err(|e| Error::input(&scene.source, e.field, e.message))?;
     let tracer = Tracer::new(gpu, &buffers);
     let mut pixels = tracer.render_to_cpu(gpu).map_err(Error::Failed)?;
-    // Veiling glare is a post-process on the linear image: applied here on
-    // the CPU, as `mirage render` does (the window shows frames without it).
-    if let Some(g) = &scene.glare
-        && view.shading == Shading::Lit
-    {
-        let (w, h) = (view.camera.width, view.camera.height);
-        let settings = g.in_pixels(view.camera.pixel_angle());
-        crate::render::glare::apply(&mut pixels, w, h, &settings);
-    }
+    apply_glare(scene, view, &mut pixels);
     Ok(pixels)
+}
+
+/// Adds the scene's veiling glare to a lit frame of `view` read back from the
+/// GPU (`pixels`: linear RGB, row-major), as `mirage render` does: a
+/// post-process on the CPU, for headless frames and for the window once its
+/// view has settled. `None` when the scene has no glare or the frame is in
+/// albedo.
+pub fn apply_glare(
+    scene: &Scene,
+    view: &View,
+    pixels: &mut [[f32; 3]],
+) -> Option<crate::render::glare::GlareStats> {
+    let g = scene.glare.as_ref()?;
+    if view.shading != Shading::Lit {
+        return None;
+    }
+    let (w, h) = (view.camera.width, view.camera.height);
+    let settings = g.in_pixels(view.camera.pixel_angle());
+    Some(crate::render::glare::apply(pixels, w, h, &settings))
 }
 
 /// The arguments of `mirage preview`.
@@ -174,6 +185,8 @@ pub struct PreviewOptions {
     pub frames: Option<u64>,
     /// Window: save the last frame with its panels here (.png).
     pub screenshot: Option<PathBuf>,
+    /// Leave out the scene's veiling glare.
+    pub no_glare: bool,
 }
 
 fn check_side(field: &str, v: Option<u32>) -> Result<Option<u32>> {
@@ -223,7 +236,10 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
     let cli = Path::new("<command line>");
     let width = check_side("--width", o.width)?;
     let height = check_side("--height", o.height)?;
-    let input = load_input(&o.input)?;
+    let mut input = load_input(&o.input)?;
+    if o.no_glare {
+        input.scene.glare = None;
+    }
     let mut inputs: Vec<&Path> = vec![o.input.as_path()];
     inputs.extend(input.scene.inputs.iter().map(PathBuf::as_path));
     if let Some(out) = &o.output {
