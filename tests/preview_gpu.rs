@@ -125,6 +125,52 @@ fn gpu_matches_cpu_on_the_hot_road() {
 }
 
 #[test]
+fn gpu_draws_the_same_stars_as_the_cpu_at_night() {
+    let test = "gpu_draws_the_same_stars_as_the_cpu_at_night";
+    let Some(gpu) = gpu(test) else { return };
+    // The physical sky 25° after sunset, looking 17° up with a 20° field of
+    // view; the stars are brightened so that the tone map shows them.
+    let text = r#"{
+      "name": "night",
+      "camera": {"position": [0, 2, 0], "look_at": [0, 300, 1000], "vertical_fov": 20,
+                 "width": 160, "height": 90},
+      "medium": {"scale": 0.02, "background": {"n": 1.0, "a": 150.0}},
+      "ground": {"albedo": [0.1, 0.1, 0.1]},
+      "sun": {"elevation": -25, "azimuth": 40},
+      "sky": {"type": "physical", "star_brightness": 1e5}
+    }"#;
+    let scene = Scene::parse(text, Path::new("night.json")).unwrap();
+    let options = RenderOptions::default();
+    let cpu = Renderer::new(&scene, &options).render();
+    let view = View::of_scene(&scene, &options, 160, 90);
+    let gpu_pixels = render_frame(&gpu, &scene, &scene.medium, &view).unwrap();
+    let tone = ToneMap::Filmic { exposure: 1.0 };
+    let stars = |px: &[[f32; 3]]| {
+        px.iter()
+            .filter(|p| p.iter().any(|&c| tone.apply(c) > 40))
+            .count()
+    };
+    let (on_cpu, on_gpu) = (stars(&cpu.pixels), stars(&gpu_pixels));
+    let (mean, share) = compare(&cpu.pixels, &gpu_pixels, tone);
+    eprintln!(
+        "{test}: star pixels CPU {on_cpu}, GPU {on_gpu}; mean |GPU − CPU| = {:.3}/255, pixels off by > 0.05: {:.3} %",
+        mean * 255.0,
+        share * 100.0
+    );
+    assert!(on_cpu > 50, "only {on_cpu} star pixels on the CPU");
+    assert!(
+        on_gpu.abs_diff(on_cpu) * 20 <= on_cpu,
+        "{on_gpu} vs {on_cpu}"
+    );
+    assert!(
+        mean < 1.0 / 255.0,
+        "mean difference {:.3}/255",
+        mean * 255.0
+    );
+    assert!(share < 0.01, "{:.3} % of pixels differ", share * 100.0);
+}
+
+#[test]
 fn straight_rays_differ_from_curved_ones_on_the_road() {
     // The straight-rays toggle must change the picture where the mirage is.
     let Some(gpu) = gpu("straight_rays_differ_from_curved_ones_on_the_road") else {

@@ -77,6 +77,7 @@ pub struct Tracer {
     profile: wgpu::Buffer,
     cells: wgpu::Buffer,
     near: wgpu::Buffer,
+    stars: wgpu::Buffer,
     sky: wgpu::Texture,
     output: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -143,7 +144,7 @@ impl Tracer {
             },
             count: None,
         }];
-        entries.extend((1..=4).chain(7..=8).map(storage_entry));
+        entries.extend((1..=4).chain(7..=9).map(storage_entry));
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 5,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -208,11 +209,12 @@ impl Tracer {
         let profile = storage_buffer(device, "profile", bytemuck::cast_slice(&scene.profile));
         let cells = storage_buffer(device, "grid cells", bytemuck::cast_slice(&scene.cells));
         let near = storage_buffer(device, "near lists", bytemuck::cast_slice(&scene.near));
+        let stars = storage_buffer(device, "star cells", bytemuck::cast_slice(&scene.stars));
         let bind_group = Self::bind(
             device,
             &layout,
             [
-                &params, &hotspots, &objects, &nodes, &profile, &cells, &near,
+                &params, &hotspots, &objects, &nodes, &profile, &cells, &near, &stars,
             ],
             &sky,
             &output,
@@ -227,6 +229,7 @@ impl Tracer {
             profile,
             cells,
             near,
+            stars,
             sky,
             output,
             bind_group,
@@ -238,11 +241,11 @@ impl Tracer {
     }
 
     /// The bind group: `buffers` are the uniform block, then the storage
-    /// buffers at bindings 1–4 and 7–8.
+    /// buffers at bindings 1–4 and 7–9.
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        buffers: [&wgpu::Buffer; 7],
+        buffers: [&wgpu::Buffer; 8],
         sky: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> wgpu::BindGroup {
@@ -250,7 +253,7 @@ impl Tracer {
         let out_view = output.create_view(&Default::default());
         let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
             .iter()
-            .zip([0, 1, 2, 3, 4, 7, 8])
+            .zip([0, 1, 2, 3, 4, 7, 8, 9])
             .map(|(b, binding)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
@@ -343,6 +346,7 @@ impl Tracer {
                     &self.profile,
                     &self.cells,
                     &self.near,
+                    &self.stars,
                 ],
                 &self.sky,
                 &self.output,

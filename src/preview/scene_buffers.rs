@@ -18,6 +18,7 @@
 use crate::medium::LogisticMedium;
 use crate::render::accel::{Aabb, Grid};
 use crate::render::air::Air;
+use crate::render::atmosphere::{STAR_CELLS, STAR_FADE, star_cell, star_radius};
 use crate::render::camera::Camera;
 use crate::render::sky::{Sky, SkyModel};
 use crate::render::{RenderOptions, Shading};
@@ -164,6 +165,9 @@ pub struct Params {
     pub grid_dims: [u32; 4],
     /// Cell size.
     pub grid_cell: [f32; 4],
+    /// Stars of the physical sky: `[angular radius, flux scale × the sun's
+    /// irradiance, fade scale (0: no fade), drawn (1) or not (0)]`.
+    pub stars: [f32; 4],
 }
 
 /// One cell of the distance grid ([`crate::render::accel::Grid`]).
@@ -199,6 +203,10 @@ pub struct SceneBuffers {
     pub cells: Vec<GpuCell>,
     /// The grid's near lists (at least one element).
     pub near: Vec<u32>,
+    /// The physical sky's star cells (`STAR_CELLS² × 6`, face-major):
+    /// `[place u, place v, brightness unit⁶, tint]`, tint 0 where a cell has
+    /// no star (at least one element).
+    pub stars: Vec<[f32; 4]>,
 }
 
 /// What the GPU frame shows, beyond the scene: the view and the switches the
@@ -539,6 +547,24 @@ pub fn bake_sky(sky: &SkyModel) -> Vec<[f32; 4]> {
     out
 }
 
+/// The star of every cube-map cell of the physical sky, as
+/// [`SceneBuffers::stars`] holds them.
+pub fn star_cells() -> Vec<[f32; 4]> {
+    let n = STAR_CELLS as u64;
+    let mut out = Vec::with_capacity(6 * STAR_CELLS * STAR_CELLS);
+    for face in 0..6 {
+        for iu in 0..n {
+            for iv in 0..n {
+                out.push(match star_cell(face, iu, iv) {
+                    Some([u, v, b, tint]) => [u as f32, v as f32, b.powi(6) as f32, tint as f32],
+                    None => [0.0; 4],
+                });
+            }
+        }
+    }
+    out
+}
+
 /// Packs `scene` (with `medium` instead of the scene's own, so that the
 /// editor can change the air without rebuilding the scene) for `view`.
 pub fn pack(
@@ -571,6 +597,7 @@ pub fn pack(
         sky: bake_sky(&sky),
         cells: Vec::new(),
         near: Vec::new(),
+        stars: vec![[0.0; 4]],
     };
     // The CPU renderer's grid of unbounding spheres and near lists, cut at
     // the ground as there.
@@ -651,6 +678,15 @@ pub fn pack(
         }
         None => p.disc_dir = [0.0, 1.0, 0.0, -1.0],
     }
+    if let SkyModel::Physical(physical) = &sky {
+        let (drawn, flux, e) = physical.star_light();
+        if drawn {
+            p.stars[1] = (flux * e) as f32;
+            p.stars[2] = (STAR_FADE * e) as f32;
+            p.stars[3] = 1.0;
+            buffers.stars = star_cells();
+        }
+    }
     p.up[3] = scene.max_distance as f32;
     p.counts = [SKY_WIDTH, SKY_HEIGHT, view.samples_per_pixel, MAX_QUERIES];
     if buffers.objects.is_empty() {
@@ -681,6 +717,7 @@ impl SceneBuffers {
         };
         p.tolerance = [1e-4, (view.hit_fraction * c.pixel_angle()) as f32, 0.0, 0.0];
         p.counts[2] = view.samples_per_pixel.max(1);
+        p.stars[0] = star_radius(c.pixel_angle()) as f32;
     }
 
     /// Sets the medium and what follows from it (the air's analysis).

@@ -31,6 +31,7 @@ struct Params {
     grid_max: vec4<f32>,
     grid_dims: vec4<u32>,
     grid_cell: vec4<f32>,
+    stars: vec4<f32>,
 }
 struct Cell { empty: f32, far: f32, start: u32, len: u32 }
 
@@ -47,6 +48,7 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 @group(0) @binding(6) var out_image: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(7) var<storage, read> cells: array<Cell>;
 @group(0) @binding(8) var<storage, read> near: array<u32>;
+@group(0) @binding(9) var<storage, read> stars: array<vec4<f32>>;
 
 const PI: f32 = 3.14159265358979;
 const BIG: f32 = 1e30;
@@ -444,7 +446,46 @@ fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
     if (P.disc_dir.w > 0.0 && dot(d, P.disc_dir.xyz) >= cos(P.disc_dir.w)) {
         c += P.disc_radiance.xyz;
     }
+    // Stars fade against a bright sky, as PhysicalSky::radiance has them.
+    if (P.stars.w > 0.0) {
+        var fade = 1.0;
+        if (P.stars.z > 0.0) { fade = exp(-(c.x + c.y + c.z) / 3.0 / P.stars.z); }
+        if (fade > 1e-6) { c += star_light(d) * fade; }
+    }
     return c;
+}
+
+// The star along unit `d` (PhysicalSky::star): a cube map of STAR_CELLS cells
+// per face edge, each with at most one star, drawn as a disc of P.stars.x.
+const STAR_CELLS: f32 = 90.0;
+
+fn star_light(d: vec3<f32>) -> vec3<f32> {
+    let a = abs(d);
+    var face: u32;
+    var u: f32;
+    var v: f32;
+    if (a.x >= a.y && a.x >= a.z) {
+        face = select(1u, 0u, d.x > 0.0); u = d.y / a.x; v = d.z / a.x;
+    } else if (a.y >= a.z) {
+        face = select(3u, 2u, d.y > 0.0); u = d.x / a.y; v = d.z / a.y;
+    } else {
+        face = select(5u, 4u, d.z > 0.0); u = d.x / a.z; v = d.y / a.z;
+    }
+    let fu = (u + 1.0) * 0.5 * STAR_CELLS;
+    let fv = (v + 1.0) * 0.5 * STAR_CELLS;
+    let iu = min(floor(fu), STAR_CELLS - 1.0);
+    let iv = min(floor(fv), STAR_CELLS - 1.0);
+    let n = u32(STAR_CELLS);
+    let s = stars[(face * n + u32(iu)) * n + u32(iv)];
+    if (s.w == 0.0) { return vec3<f32>(0.0); }
+    let cell = 2.0 / STAR_CELLS;
+    let r = P.stars.x;
+    let margin = min(r / cell, 0.45);
+    let du = (fu - (iu + margin + s.x * (1.0 - 2.0 * margin))) * cell;
+    let dv = (fv - (iv + margin + s.y * (1.0 - 2.0 * margin))) * cell;
+    if (du * du + dv * dv > r * r) { return vec3<f32>(0.0); }
+    let radiance = P.stars.y * s.z / (PI * r * r);
+    return radiance * vec3<f32>(s.w, 1.0, 2.0 - s.w);
 }
 
 // -------------------------------------------------------------- the marching
