@@ -1,6 +1,7 @@
 //! Packing a scene for the GPU: the camera, the compiled medium, the air's
 //! analysis (steps, hot-spot zones, the stratified profile for Snell
-//! decisions), the objects as a flat SDF program, the sun and the sky table.
+//! decisions), the objects as a flat SDF program, the sun, the sky table and
+//! the physical sky's star cells.
 //!
 //! Everything is f32, and the medium stays in δ form: the amplitudes are the
 //! compiled `C·|k_s|·n/S` (≈ 1e-5), which f32 keeps to 7 digits, whereas

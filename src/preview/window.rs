@@ -688,8 +688,10 @@ impl App {
             wgpu::CurrentSurfaceTexture::Success(f)
             | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
             other => {
-                // Lost or outdated: reconfigure and try next frame.
+                // Lost or outdated: reconfigure and try next frame, which
+                // traces (this one's trace was never dispatched).
                 let _ = other;
+                self.traced.clear();
                 g.surface.configure(&g.gpu.device, &g.config);
                 for id in &textures.free {
                     g.egui_renderer.free_texture(id);
