@@ -82,46 +82,6 @@ pub fn display_pipeline(
     (pipeline, layout, uniform)
 }
 
-/// Records the copy of `texture` (4 bytes per texel) into a new read-back
-/// buffer; returns it with its row pitch.
-pub fn copy_to_buffer(
-    device: &wgpu::Device,
-    encoder: &mut wgpu::CommandEncoder,
-    texture: &wgpu::Texture,
-) -> (wgpu::Buffer, u32) {
-    let (w, h) = (texture.width(), texture.height());
-    let row =
-        (4 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot read-back"),
-        size: (row * h) as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    (buffer, row)
-}
-
 /// Maps a read-back buffer of a `w × h` texture in `format` and encodes it as
 /// PNG bytes.
 pub fn read_png(

@@ -23,9 +23,9 @@
 
 use super::Input;
 use super::camera::{CameraState, MAX_FOV, MIN_FOV};
-use super::display::{copy_to_buffer, display_pipeline, read_png};
+use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
-use super::gpu::{Gpu, Tracer};
+use super::gpu::{Gpu, Tracer, copy_to_buffer};
 use super::scene_buffers::{SceneBuffers, View, pack};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
@@ -801,7 +801,7 @@ impl App {
         }
         let shot = shot_texture
             .as_ref()
-            .map(|t| copy_to_buffer(&g.gpu.device, &mut encoder, t));
+            .map(|t| copy_to_buffer(&g.gpu.device, &mut encoder, t, 4));
         commands.push(encoder.finish());
         g.gpu.queue.submit(commands);
         g.gpu.queue.present(frame);
