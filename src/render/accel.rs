@@ -86,9 +86,10 @@ impl Aabb {
         (t0 <= t1).then_some((t0, t1))
     }
 
-    /// Whether the horizontal half-line `o + t·h` (t ≥ 0, in (x, z)) meets the
-    /// box's (x, z) rectangle; a zero `h` tests the point `o`.
-    pub fn halfline_meets_xz(&self, o: DVec2, h: DVec2) -> bool {
+    /// The interval of t ≥ 0 over which the horizontal half-line `o + t·h`
+    /// (in (x, z)) lies in the box's (x, z) rectangle, if it meets it; a zero
+    /// `h` tests the point `o` (and gives [0, ∞)).
+    fn xz_interval(&self, o: DVec2, h: DVec2) -> Option<(f64, f64)> {
         let (lo, hi) = (
             DVec2::new(self.min.x, self.min.z),
             DVec2::new(self.max.x, self.max.z),
@@ -99,7 +100,7 @@ impl Aabb {
             let (o, h, lo, hi) = (o[k], h[k], lo[k], hi[k]);
             if h == 0.0 {
                 if o < lo || o > hi {
-                    return false;
+                    return None;
                 }
             } else {
                 let (a, b) = ((lo - o) / h, (hi - o) / h);
@@ -107,32 +108,20 @@ impl Aabb {
                 t1 = t1.min(a.max(b));
             }
         }
-        t0 <= t1
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    /// Whether the horizontal half-line `o + t·h` (t ≥ 0, in (x, z)) meets the
+    /// box's (x, z) rectangle; a zero `h` tests the point `o`.
+    pub fn halfline_meets_xz(&self, o: DVec2, h: DVec2) -> bool {
+        self.xz_interval(o, h).is_some()
     }
 
     /// The horizontal distance along `h` (unit, in (x, z)) from `o` after which
     /// the half-line has left the box's (x, z) rectangle for good (0 if it never
     /// meets it).
     pub fn xz_exit(&self, o: DVec2, h: DVec2) -> f64 {
-        let (lo, hi) = (
-            DVec2::new(self.min.x, self.min.z),
-            DVec2::new(self.max.x, self.max.z),
-        );
-        let mut t0 = 0.0f64;
-        let mut t1 = f64::INFINITY;
-        for k in 0..2 {
-            let (o, h, lo, hi) = (o[k], h[k], lo[k], hi[k]);
-            if h == 0.0 {
-                if o < lo || o > hi {
-                    return 0.0;
-                }
-            } else {
-                let (a, b) = ((lo - o) / h, (hi - o) / h);
-                t0 = t0.max(a.min(b));
-                t1 = t1.min(a.max(b));
-            }
-        }
-        if t0 <= t1 { t1 } else { 0.0 }
+        self.xz_interval(o, h).map_or(0.0, |(_, t1)| t1)
     }
 }
 
