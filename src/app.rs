@@ -102,12 +102,8 @@ pub fn fit(problem_path: &Path, options: &FitOptions) -> Result<crate::io::repor
         problem.solver.method =
             crate::io::problem::solver_settings(&spec, Path::new("<command line>"))
                 .map_err(|e| match e {
-                    crate::error::Error::Input { file, message, .. } => {
-                        crate::error::Error::Input {
-                            file,
-                            field: "--method".into(),
-                            message,
-                        }
+                    crate::error::Error::Input { error, .. } => {
+                        crate::error::Error::usage("--method", error.message)
                     }
                     other => other,
                 })?

@@ -386,10 +386,10 @@ pub fn heat_map_png(
         .flat_map(|d| heat(d, 2.0 * threshold))
         .collect();
     let img = image::RgbImage::from_raw(ours.width as u32, ours.height as u32, raw)
-        .ok_or_else(|| Error::Failed("heat map buffer has the wrong size".into()))?;
+        .ok_or_else(|| Error::encode("the heat map", "the image buffer has the wrong size"))?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::Failed(format!("cannot encode the heat map: {e}")))?;
+        .map_err(|e| Error::encode("the heat map", e))?;
     Ok(bytes.into_inner())
 }
 
@@ -497,12 +497,10 @@ pub fn compare_command(o: &CompareOptions) -> Result<Metrics> {
     print!("{}", table(&m));
     let missed = o.limits.missed(&m);
     if !missed.is_empty() {
-        return Err(Error::Failed(format!(
-            "{} vs {}: {}",
-            o.ours.display(),
-            o.reference.display(),
-            missed.join("; ")
-        )));
+        return Err(Error::LimitsMissed {
+            subject: format!("{} vs {}", o.ours.display(), o.reference.display()),
+            missed,
+        });
     }
     Ok(m)
 }

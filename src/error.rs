@@ -1,18 +1,92 @@
-//! Errors a user can see. Bad input is always one line naming the file, the
-//! field and what is wrong, and exits with code 2.
+//! Errors a user can see, in one vocabulary.
+//!
+//! - [`FieldError`] is what every parser and validator returns: the path of the
+//!   field inside its document (`medium.hotspots[0].a`) and what is wrong. A
+//!   validator of a part returns paths relative to that part; the caller prefixes
+//!   them with [`FieldError::within`] as the error travels up.
+//! - [`Error`] is what a command returns. Bad input is [`Error::Input`] (a
+//!   [`FieldError`] and the file it came from) or [`Error::Usage`] (a command-line
+//!   flag): one line naming the file or flag, the field and what is wrong, exit
+//!   code 2. Everything else (files that cannot be read or written, images that
+//!   cannot be encoded, the GPU, the solver) has a typed variant and exit code 1.
 
 use std::path::{Path, PathBuf};
+
+/// The path of the whole document (or of no particular field), in messages.
+pub const WHOLE_DOCUMENT: &str = "-";
+
+/// A problem with one field of an input document.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct FieldError {
+    /// Path of the field (`medium.hotspots[0].a`, `objects[2].radius`), relative
+    /// to whatever the validator was given; [`WHOLE_DOCUMENT`] for none.
+    pub path: String,
+    /// What is wrong, in words.
+    pub message: String,
+}
+
+impl FieldError {
+    /// An error at `path`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        FieldError {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An error about the document as a whole (no particular field).
+    pub fn whole(message: impl Into<String>) -> Self {
+        FieldError::new(WHOLE_DOCUMENT, message)
+    }
+
+    /// The same error seen from one level up: `prefix` is the path of the part
+    /// the validator was given (`medium`, `pairs[3]`, `objects[1].children[0]`).
+    /// Indices join without a dot: `pairs` + `[3].origin` → `pairs[3].origin`.
+    pub fn within(mut self, prefix: &str) -> Self {
+        if prefix.is_empty() {
+            return self;
+        }
+        self.path = join_path(prefix, &self.path);
+        self
+    }
+
+    /// This error, found in `file`.
+    pub fn in_file(self, file: &Path) -> Error {
+        Error::Input {
+            file: file.display().to_string(),
+            error: self,
+        }
+    }
+}
+
+/// `prefix` joined with a relative `path`.
+pub fn join_path(prefix: &str, path: &str) -> String {
+    if path.is_empty() || path == WHOLE_DOCUMENT {
+        prefix.to_string()
+    } else if path.starts_with('[') {
+        format!("{prefix}{path}")
+    } else {
+        format!("{prefix}.{path}")
+    }
+}
 
 /// Every error mirage reports.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The user's input is invalid (exit code 2).
-    #[error("{file}: {field}: {message}")]
+    /// An input file is invalid (exit code 2).
+    #[error("{file}: {error}")]
     Input {
-        /// The file (or `<command line>`).
+        /// The file.
         file: String,
-        /// Path of the field within the file (`medium.hotspots[0].a`), or `-`.
-        field: String,
+        /// The field and what is wrong with it.
+        error: FieldError,
+    },
+    /// A command-line flag is invalid (exit code 2).
+    #[error("{flag}: {message}")]
+    Usage {
+        /// The flag, as typed (`--hit-fraction`).
+        flag: String,
         /// What is wrong.
         message: String,
     },
@@ -24,29 +98,109 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
-    /// Anything else that went wrong while running (exit code 1).
-    #[error("{0}")]
-    Failed(String),
+    /// An output could not be encoded: an image, a plot, a JSON document (exit
+    /// code 1).
+    #[error("cannot encode {what}: {message}")]
+    Encode {
+        /// What was being encoded (`the PNG`, `the plot`, `the result`).
+        what: &'static str,
+        /// The encoder's message.
+        message: String,
+    },
+    /// The GPU (adapter, device, window, surface, read-back) failed (exit code 1).
+    #[error("GPU: {stage}: {message}")]
+    Gpu {
+        /// What was being done (`requesting an adapter`, `reading back the frame`).
+        stage: &'static str,
+        /// The driver's or library's message.
+        message: String,
+    },
+    /// A check the user asked for was missed, e.g. `mirage compare --min-psnr`
+    /// (exit code 1).
+    #[error("{subject}: {}", missed.join("; "))]
+    LimitsMissed {
+        /// What was checked (`ours.png vs ref.exr`).
+        subject: String,
+        /// Each limit missed, in words.
+        missed: Vec<String>,
+    },
+    /// The solver could not run (exit code 1).
+    #[error("solver run `{run}`: {message}")]
+    Solver {
+        /// The run (`lm`, `lm (start 3)`, `nelder-mead`).
+        run: String,
+        /// The solver library's message.
+        message: String,
+    },
 }
 
 impl Error {
     /// An input error in `file` at `field`.
     pub fn input(file: &Path, field: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::Input {
-            file: file.display().to_string(),
-            field: field.into(),
+        FieldError::new(field, message).in_file(file)
+    }
+
+    /// A bad command-line flag.
+    pub fn usage(flag: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Usage {
+            flag: flag.into(),
             message: message.into(),
         }
     }
 
-    /// The process exit code for this error.
+    /// An encoder's failure.
+    pub fn encode(what: &'static str, e: impl std::fmt::Display) -> Self {
+        Error::Encode {
+            what,
+            message: e.to_string(),
+        }
+    }
+
+    /// A GPU failure at `stage`.
+    pub fn gpu(stage: &'static str, e: impl std::fmt::Display) -> Self {
+        Error::Gpu {
+            stage,
+            message: e.to_string(),
+        }
+    }
+
+    /// The field error of an input error.
+    pub fn field(&self) -> Option<&FieldError> {
+        match self {
+            Error::Input { error, .. } => Some(error),
+            _ => None,
+        }
+    }
+
+    /// The process exit code for this error: 2 for bad input (a file or a flag),
+    /// 1 for everything else.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Input { .. } => 2,
-            Error::Io { .. } | Error::Failed(_) => 1,
+            Error::Input { .. } | Error::Usage { .. } => 2,
+            Error::Io { .. }
+            | Error::Encode { .. }
+            | Error::Gpu { .. }
+            | Error::LimitsMissed { .. }
+            | Error::Solver { .. } => 1,
         }
     }
 }
 
 /// Result with mirage's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_join_with_dots_and_brackets() {
+        let e = FieldError::new("a", "bad").within("[3]").within("hotspots");
+        assert_eq!(e.path, "hotspots[3].a");
+        assert_eq!(FieldError::whole("x").within("medium").path, "medium");
+        let err = FieldError::new("medium.background.a", "zero").in_file(Path::new("p.json"));
+        assert_eq!(err.to_string(), "p.json: medium.background.a: zero");
+        assert_eq!(err.exit_code(), 2);
+        assert_eq!(Error::usage("--spp", "must be ≥ 1").exit_code(), 2);
+    }
+}

@@ -12,7 +12,7 @@ pub mod synthetic;
 
 pub use history::{History, IterationRecord, RunHistory};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::io::Problem;
 use crate::io::report::{FitReport, ParamReport, RunReport, SolverReport, trace_pairs};
 use objective::Objective;
@@ -31,8 +31,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
         &problem.bounds,
         settings.target_objective,
         hook,
-    )
-    .map_err(Error::Failed)?;
+    )?;
     let medium = objective.medium(&solution.x);
     let (_, jac) = objective.jacobian(&solution.x);
     let ident = identify::analyse(&jac, &solution.x, &problem.free, solution.objective);

@@ -4,6 +4,7 @@
 use super::history::{IterationRecord, RunHistory};
 use super::lm::{LevenbergMarquardt, LmState};
 use super::objective::Objective;
+use crate::error::Error;
 use crate::io::problem::{SolverMethod, SolverSettings};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
@@ -226,6 +227,13 @@ fn describe(reason: Option<&TerminationReason>) -> (String, bool) {
 /// answer in 9 iterations and costs the other problems 2–5 iterations.
 const INITIAL_DAMPING: f64 = 0.1;
 
+fn solver_error(run: &str, e: impl std::fmt::Display) -> Error {
+    Error::Solver {
+        run: run.to_string(),
+        message: e.to_string(),
+    }
+}
+
 /// One Levenberg–Marquardt run from `x0`.
 pub fn run_lm(
     objective: &Objective,
@@ -234,7 +242,7 @@ pub fn run_lm(
     x0: &[f64],
     label: &str,
     hook: Option<IterateHook>,
-) -> Result<Run, String> {
+) -> Result<Run, Error> {
     let lower = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.0));
     let upper = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.1));
     let solver = LevenbergMarquardt::new()
@@ -243,7 +251,7 @@ pub fn run_lm(
         .and_then(|s| s.with_xtol(settings.xtol))
         .and_then(|s| s.with_gtol(settings.gtol))
         .and_then(|s| s.with_bounds(lower, upper))
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| solver_error(label, e))?;
     let recorder = Recorder::new(label, None, hook);
     let start = DVector::from_column_slice(x0);
     let result = Executor::new(Residuals(objective), solver)
@@ -251,7 +259,7 @@ pub fn run_lm(
         .add_observer(recorder.clone(), ObserverMode::Always)
         .timer(false)
         .run()
-        .map_err(|e| format!("{label}: {e}"))?;
+        .map_err(|e| solver_error(label, e))?;
     let state = result.state();
     let end = state
         .get_best_param()
@@ -269,7 +277,7 @@ pub fn run_nelder_mead(
     x0: &[f64],
     label: &str,
     hook: Option<IterateHook>,
-) -> Result<Run, String> {
+) -> Result<Run, Error> {
     let map = BoxMap {
         bounds: bounds.to_vec(),
     };
@@ -289,7 +297,7 @@ pub fn run_nelder_mead(
     }
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-30)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| solver_error(label, e))?;
     let recorder = Recorder::new(label, Some(map.clone()), hook);
     let cost = Cost {
         objective,
@@ -300,7 +308,7 @@ pub fn run_nelder_mead(
         .add_observer(recorder.clone(), ObserverMode::Always)
         .timer(false)
         .run()
-        .map_err(|e| format!("{label}: {e}"))?;
+        .map_err(|e| solver_error(label, e))?;
     let state = result.state();
     let end = state
         .get_best_param()
@@ -365,7 +373,7 @@ pub fn solve(
     bounds: &[(f64, f64)],
     target: f64,
     hook: Option<IterateHook>,
-) -> Result<Solution, String> {
+) -> Result<Solution, Error> {
     let x0 = objective.start().as_slice().to_vec();
     let mut runs = Vec::new();
     match settings.method {
@@ -389,7 +397,7 @@ pub fn solve(
             )?);
             if runs[0].objective > target && !x0.is_empty() {
                 let starts = starting_points(&x0, bounds, settings.starts, settings.seed);
-                let restarts: Vec<Result<Run, String>> = starts
+                let restarts: Vec<Result<Run, Error>> = starts
                     .par_iter()
                     .enumerate()
                     .map(|(k, s)| {

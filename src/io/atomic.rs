@@ -37,8 +37,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Serialises `value` as pretty JSON and writes it atomically.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let mut text = serde_json::to_string_pretty(value)
-        .map_err(|e| Error::Failed(format!("cannot serialise the result: {e}")))?;
+    let mut text =
+        serde_json::to_string_pretty(value).map_err(|e| Error::encode("the result as JSON", e))?;
     text.push('\n');
     write_atomic(path, text.as_bytes())
 }

@@ -103,7 +103,7 @@ trait Figure {
 }
 
 fn draw_failed(e: impl std::fmt::Display) -> Error {
-    Error::Failed(format!("cannot draw the plot: {e}"))
+    Error::encode("the plot", e)
 }
 
 /// Renders `figure` to the bytes of an image file.
@@ -129,7 +129,7 @@ fn render(figure: &impl Figure, format: ImageFormat) -> Result<Vec<u8>> {
                 h,
                 image::ExtendedColorType::Rgb8,
             )
-            .map_err(|e| Error::Failed(format!("cannot encode the PNG: {e}")))?;
+            .map_err(|e| Error::encode("the PNG", e))?;
             Ok(bytes)
         }
         ImageFormat::Svg => {

@@ -98,13 +98,13 @@ pub fn read_png(
     });
     gpu.device
         .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Failed(format!("GPU poll failed: {e}")))?;
+        .map_err(|e| Error::gpu("waiting for the screenshot", e))?;
     rx.recv()
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
+        .map_err(|e| Error::gpu("reading back the screenshot", e))?
+        .map_err(|e| Error::gpu("reading back the screenshot", e))?;
     let data = buffer
         .get_mapped_range(..)
-        .map_err(|e| Error::Failed(format!("screenshot read-back failed: {e}")))?;
+        .map_err(|e| Error::gpu("reading back the screenshot", e))?;
     let bgra = matches!(
         format,
         wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
@@ -121,9 +121,9 @@ pub fn read_png(
         }
     }
     let img = image::RgbImage::from_raw(w, h, rgb)
-        .ok_or_else(|| Error::Failed("screenshot buffer has the wrong size".into()))?;
+        .ok_or_else(|| Error::encode("the screenshot", "the image buffer has the wrong size"))?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::Failed(format!("cannot encode the screenshot: {e}")))?;
+        .map_err(|e| Error::encode("the screenshot", e))?;
     Ok(bytes.into_inner())
 }

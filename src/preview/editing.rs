@@ -167,9 +167,10 @@ pub fn with_medium(text: &str, path: &Path, medium: &LogisticMedium) -> Result<S
     obj.remove("medium_from");
     obj.insert(
         "medium".to_string(),
-        serde_json::to_value(medium).map_err(|e| Error::Failed(e.to_string()))?,
+        serde_json::to_value(medium).map_err(|e| Error::encode("the medium as JSON", e))?,
     );
-    let mut out = serde_json::to_string_pretty(&value).map_err(|e| Error::Failed(e.to_string()))?;
+    let mut out =
+        serde_json::to_string_pretty(&value).map_err(|e| Error::encode("the file as JSON", e))?;
     out.push('\n');
     Ok(out)
 }

@@ -5,6 +5,7 @@
 //! `mesa-vulkan-drivers libvulkan1`) serves: wgpu picks it as a `Cpu` adapter.
 
 use super::scene_buffers::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers};
+use crate::error::{Error, Result};
 use wgpu::util::DeviceExt;
 
 /// The tracing shader (WGSL).
@@ -27,7 +28,7 @@ pub struct Gpu {
 impl Gpu {
     /// A device on the default adapter (a software one if that is all there
     /// is); `Err` with the reason when there is none.
-    pub fn new() -> Result<Gpu, String> {
+    pub fn new() -> Result<Gpu> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         Gpu::with_instance(instance, None)
@@ -37,20 +38,20 @@ impl Gpu {
     pub fn with_instance(
         instance: wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
-    ) -> Result<Gpu, String> {
+    ) -> Result<Gpu> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             force_fallback_adapter: false,
             compatible_surface: surface,
             apply_limit_buckets: false,
         }))
-        .map_err(|e| format!("no GPU adapter: {e}"))?;
+        .map_err(|e| Error::gpu("requesting an adapter", e))?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("mirage preview"),
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .map_err(|e| format!("cannot open the GPU device: {e}"))?;
+        .map_err(|e| Error::gpu("opening the device", e))?;
         Ok(Gpu {
             instance,
             adapter,
@@ -433,12 +434,12 @@ impl Tracer {
     }
 
     /// Traces one frame and reads it back: linear RGB, row-major, top row first.
-    pub fn render_to_cpu(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, String> {
+    pub fn render_to_cpu(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>> {
         self.read(gpu, true)
     }
 
     /// Reads back the frame last traced, without tracing again.
-    pub fn read_back(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>, String> {
+    pub fn read_back(&self, gpu: &Gpu) -> Result<Vec<[f32; 3]>> {
         self.read(gpu, false)
     }
 
@@ -471,7 +472,7 @@ impl Tracer {
     }
 
     /// Reads the linear image back, after tracing it first if `trace`.
-    fn read(&self, gpu: &Gpu, trace: bool) -> Result<Vec<[f32; 3]>, String> {
+    fn read(&self, gpu: &Gpu, trace: bool) -> Result<Vec<[f32; 3]>> {
         let (w, h) = (self.width, self.height);
         let mut encoder = gpu
             .device
@@ -487,13 +488,13 @@ impl Tracer {
         });
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| format!("GPU poll failed: {e}"))?;
+            .map_err(|e| Error::gpu("waiting for the frame", e))?;
         rx.recv()
-            .map_err(|e| format!("GPU read-back failed: {e}"))?
-            .map_err(|e| format!("GPU read-back failed: {e}"))?;
+            .map_err(|e| Error::gpu("reading back the frame", e))?
+            .map_err(|e| Error::gpu("reading back the frame", e))?;
         let data = staging
             .get_mapped_range(..)
-            .map_err(|e| format!("GPU read-back failed: {e}"))?;
+            .map_err(|e| Error::gpu("reading back the frame", e))?;
         let mut out = Vec::with_capacity((w * h) as usize);
         for y in 0..h {
             let line: &[f32] =

@@ -120,10 +120,14 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
 
 /// A GPU, or the error every command reports without one.
 pub fn open_gpu() -> Result<Gpu> {
-    Gpu::new().map_err(|e| {
-        Error::Failed(format!(
-            "{e} (without a GPU, install Mesa's software Vulkan: apt-get install mesa-vulkan-drivers libvulkan1)"
-        ))
+    Gpu::new().map_err(|e| match e {
+        Error::Gpu { stage, message } => Error::Gpu {
+            stage,
+            message: format!(
+                "{message} (without a GPU, install Mesa's software Vulkan: apt-get install mesa-vulkan-drivers libvulkan1)"
+            ),
+        },
+        other => other,
     })
 }
 
@@ -138,7 +142,7 @@ pub fn render_frame(
     let buffers =
         pack(scene, medium, view).map_err(|e| Error::input(&scene.source, e.field, e.message))?;
     let tracer = Tracer::new(gpu, &buffers);
-    let mut pixels = tracer.render_to_cpu(gpu).map_err(Error::Failed)?;
+    let mut pixels = tracer.render_to_cpu(gpu)?;
     apply_glare(scene, view, &mut pixels);
     Ok(pixels)
 }

@@ -55,15 +55,16 @@ pub fn run(
     screenshot: Option<PathBuf>,
 ) -> Result<()> {
     let event_loop = EventLoop::new().map_err(|e| {
-        Error::Failed(format!(
-            "cannot open a window ({e}); is DISPLAY set? (mirage preview --headless renders without one)"
-        ))
+        Error::gpu(
+            "opening a window (is DISPLAY set? mirage preview --headless renders without one)",
+            e,
+        )
     })?;
     let size = (width.unwrap_or(1600), height.unwrap_or(900));
     let mut app = App::new(input, size, albedo, straight, frames, screenshot);
     event_loop
         .run_app(&mut app)
-        .map_err(|e| Error::Failed(format!("window event loop failed: {e}")))?;
+        .map_err(|e| Error::gpu("running the window's event loop", e))?;
     match app.failure.take() {
         Some(e) => Err(e),
         None => Ok(()),
@@ -217,14 +218,14 @@ impl App {
         let window = Arc::new(
             event_loop
                 .create_window(attrs)
-                .map_err(|e| Error::Failed(format!("cannot create the window: {e}")))?,
+                .map_err(|e| Error::gpu("creating the window", e))?,
         );
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let surface = instance
             .create_surface(Arc::clone(&window))
-            .map_err(|e| Error::Failed(format!("cannot create the window's surface: {e}")))?;
-        let gpu = Gpu::with_instance(instance, Some(&surface)).map_err(Error::Failed)?;
+            .map_err(|e| Error::gpu("creating the window's surface", e))?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
         // A software adapter (lavapipe) starts at half resolution.
         if gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu {
             self.render_scale = 2;
@@ -237,7 +238,7 @@ impl App {
             .copied()
             .find(|f| !f.is_srgb())
             .or_else(|| caps.formats.first().copied())
-            .ok_or_else(|| Error::Failed("the surface supports no format".into()))?;
+            .ok_or_else(|| Error::gpu("configuring the surface", "it supports no format"))?;
         let size = window.inner_size();
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
@@ -619,7 +620,7 @@ impl App {
             return Ok(true);
         }
         if !self.glared {
-            let mut pixels = g.tracer.read_back(&g.gpu).map_err(Error::Failed)?;
+            let mut pixels = g.tracer.read_back(&g.gpu)?;
             if let Some(stats) = super::apply_glare(&self.input.scene, view, &mut pixels) {
                 g.tracer.upload(&g.gpu, &pixels);
                 self.glare_message = format!(

@@ -53,10 +53,10 @@ pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -
         raw.extend(p.iter().map(|&c| tone.apply(c)));
     }
     let img = image::RgbImage::from_raw(width, height, raw)
-        .ok_or_else(|| Error::Failed("image buffer has the wrong size".into()))?;
+        .ok_or_else(|| Error::encode("the PNG", "the image buffer has the wrong size"))?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::Failed(format!("cannot encode the PNG: {e}")))?;
+        .map_err(|e| Error::encode("the PNG", e))?;
     Ok(bytes.into_inner())
 }
 
@@ -73,6 +73,6 @@ pub fn encode_exr(width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<Vec<u8
     image
         .write()
         .to_buffered(&mut bytes)
-        .map_err(|e| crate::error::Error::Failed(format!("cannot encode the EXR: {e}")))?;
+        .map_err(|e| crate::error::Error::encode("the EXR", e))?;
     Ok(bytes.into_inner())
 }
