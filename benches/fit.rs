@@ -5,8 +5,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use mirage::fit::fit;
 use mirage::fit::synthetic::retarget;
-use mirage::io::Problem;
 use mirage::pair::PointPair;
+use mirage::problem::Problem;
 use std::path::Path;
 use std::time::Duration;
 

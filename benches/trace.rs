@@ -13,9 +13,9 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput};
 use mirage::fit::objective::Objective;
-use mirage::io::Problem;
 use mirage::math::V3;
 use mirage::medium::{Background, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium};
+use mirage::problem::Problem;
 use mirage::trace::lanes::{BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_3d};
 use mirage::trace::stratified::trace_batch_2d;
 use mirage::trace::{End, Method, TargetPlane, Trace, TraceOptions, trace};

@@ -2,8 +2,9 @@
 //! parses its arguments and calls these).
 
 use crate::error::Result;
-use crate::io::report::{TraceReport, trace_pairs};
-use crate::io::{Problem, check_not_input, write_json};
+use crate::evaluate::{TraceReport, trace_pairs};
+use crate::io::{check_not_input, write_json};
+use crate::problem::Problem;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -92,22 +93,21 @@ pub struct FitOptions {
 
 /// `mirage fit`: fits the free parameters, prints a summary, writes the result
 /// and plots. All outputs are checked before the fit and written atomically.
-pub fn fit(problem_path: &Path, options: &FitOptions) -> Result<crate::io::report::FitReport> {
+pub fn fit(problem_path: &Path, options: &FitOptions) -> Result<crate::fit::report::FitReport> {
     let mut problem = Problem::load(problem_path)?;
     if let Some(m) = &options.method {
-        let spec = crate::io::problem::SolverSpec {
+        let spec = crate::problem::SolverSpec {
             method: m.clone(),
             ..Default::default()
         };
-        problem.solver.method =
-            crate::io::problem::solver_settings(&spec, Path::new("<command line>"))
-                .map_err(|e| match e {
-                    crate::error::Error::Input { error, .. } => {
-                        crate::error::Error::usage("--method", error.message)
-                    }
-                    other => other,
-                })?
-                .method;
+        problem.solver.method = crate::problem::solver_settings(&spec, Path::new("<command line>"))
+            .map_err(|e| match e {
+                crate::error::Error::Input { error, .. } => {
+                    crate::error::Error::usage("--method", error.message)
+                }
+                other => other,
+            })?
+            .method;
     }
     for out in [&options.output, &options.plot, &options.rays]
         .into_iter()
@@ -154,7 +154,7 @@ pub fn fit(problem_path: &Path, options: &FitOptions) -> Result<crate::io::repor
 }
 
 /// The terminal summary of a fit.
-pub fn fit_summary(problem: &Problem, r: &crate::io::report::FitReport) -> String {
+pub fn fit_summary(problem: &Problem, r: &crate::fit::report::FitReport) -> String {
     let mut s = String::new();
     let sv = &r.solver;
     let _ = writeln!(

@@ -10,6 +10,7 @@ pub mod app;
 pub mod compare;
 pub mod envmap;
 pub mod error;
+pub mod evaluate;
 pub mod fit;
 pub mod io;
 pub mod math;
@@ -18,7 +19,9 @@ pub mod pair;
 pub mod plot;
 #[cfg(feature = "preview")]
 pub mod preview;
+pub mod problem;
 pub mod render;
 pub mod scene;
 pub mod trace;
 pub mod tradeoff;
+pub mod validate;

@@ -3,8 +3,8 @@
 //! right-hand-side evaluations), and what that does to a fit.
 
 use crate::error::{Error, Result};
-use crate::io::Problem;
-use crate::io::report::trace_pairs;
+use crate::evaluate::trace_pairs;
+use crate::problem::Problem;
 use crate::trace::{Method, TraceOptions};
 use serde::Serialize;
 use std::time::{Duration, Instant};

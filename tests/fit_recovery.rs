@@ -4,9 +4,9 @@
 use mirage::fit::objective::Objective;
 use mirage::fit::solve::{IterateHook, solve};
 use mirage::fit::synthetic::retarget;
-use mirage::io::problem::{SolverMethod, SolverSettings, SolverSpec, solver_settings};
 use mirage::medium::{Background, HotSpot, Inversion, LogisticMedium, Param};
 use mirage::pair::PointPair;
+use mirage::problem::{SolverMethod, SolverSettings, SolverSpec, solver_settings};
 use mirage::trace::{Method, TraceOptions};
 use std::path::Path;
 use std::sync::{Arc, Mutex};

@@ -3,8 +3,8 @@
 //! history (however odd) makes the convergence plot panic.
 
 use mirage::fit::{History, IterationRecord, RunHistory};
-use mirage::io::Problem;
 use mirage::plot::{ImageFormat, draw_convergence, draw_rays};
+use mirage::problem::Problem;
 use std::collections::HashSet;
 use std::path::Path;
 

@@ -1,8 +1,8 @@
 //! The bundled problems: every file loads, traces, and fits; and a fit's result
 //! does not depend on the number of threads.
 
-use mirage::io::Problem;
-use mirage::io::report::trace_pairs;
+use mirage::evaluate::trace_pairs;
+use mirage::problem::Problem;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -5,9 +5,9 @@
 //! path reuse changes nothing a picture can show.
 
 use glam::DVec3;
-use mirage::io::Problem;
 use mirage::math::V3;
 use mirage::medium::IndexField;
+use mirage::problem::Problem;
 use mirage::render::march::MarchStats;
 use mirage::render::{RenderOptions, Renderer, Shading, render};
 use mirage::scene::Scene;

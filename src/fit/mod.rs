@@ -7,15 +7,17 @@ pub mod history;
 pub mod identify;
 pub mod lm;
 pub mod objective;
+pub mod report;
 pub mod solve;
 pub mod synthetic;
 
 pub use history::{History, IterationRecord, RunHistory};
 
 use crate::error::Result;
-use crate::io::Problem;
-use crate::io::report::{FitReport, ParamReport, RunReport, SolverReport, trace_pairs};
+use crate::evaluate::trace_pairs;
+use crate::problem::Problem;
 use objective::Objective;
+use report::{FitReport, ParamReport, RunReport, SolverReport};
 use solve::IterateHook;
 use std::time::Instant;
 

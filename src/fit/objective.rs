@@ -8,10 +8,10 @@
 //! step sizes come from the real parts only, which freezes the step sequence for
 //! the derivative: no step-control noise, unlike finite differences.
 
-use crate::io::Problem;
 use crate::math::Real;
 use crate::medium::{LogisticField, LogisticMedium, Param};
 use crate::pair::PointPair;
+use crate::problem::Problem;
 use crate::trace::lanes::{BatchOptions, RayJob, trace_batch_into};
 use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};

@@ -1,9 +1,10 @@
-//! The file formats, in one place: problem files in, results out, and the
-//! atomic writer every output goes through.
+//! Files in and out, and nothing else: reading JSON input with messages that name
+//! the file and the field ([`json`]), and the atomic writer every output goes
+//! through ([`atomic`]). What the files mean lives with their types (the
+//! problem in [`crate::problem`], results in [`crate::evaluate`] and
+//! [`crate::fit::report`], scenes in [`crate::scene`]).
 
 mod atomic;
-pub mod problem;
-pub mod report;
+pub mod json;
 
 pub use atomic::{check_not_input, write_atomic, write_json};
-pub use problem::{Problem, SolverSettings};

@@ -7,10 +7,10 @@ use super::{
     legend_height, pixel_mapper, save, series_color, truncate_legend,
 };
 use crate::error::Result;
-use crate::io::Problem;
-use crate::io::report::pair_report;
+use crate::evaluate::pair_report;
 use crate::math::V3;
 use crate::medium::{IndexField, LogisticMedium};
+use crate::problem::Problem;
 use crate::trace::RayState;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -121,7 +121,7 @@ fn ray_polyline(
     path: &[RayState],
     frame: &ViewFrame,
     target: V3,
-    report: &crate::io::report::PairReport,
+    report: &crate::evaluate::PairReport,
 ) -> Vec<V3> {
     let plane = frame.distance(target);
     let endpoint = V3::from(report.endpoint);

@@ -4,11 +4,11 @@
 //! saving the edited medium into a copy of the input file.
 
 use crate::error::{Error, Result};
+use crate::evaluate::trace_pairs;
 use crate::fit::IterationRecord;
-use crate::io::Problem;
-use crate::io::report::trace_pairs;
 use crate::io::write_atomic;
 use crate::medium::{HotField, HotSpot, LogisticMedium, Param};
+use crate::problem::Problem;
 use crate::render::camera::Camera;
 use glam::{DVec2, DVec3};
 use std::path::{Path, PathBuf};
@@ -191,7 +191,7 @@ pub fn save(input: &Path, medium: &LogisticMedium, out: &Path) -> Result<()> {
     medium
         .validate()
         .map_err(|e| Error::input(out, format!("medium.{}", e.field), e.message))?;
-    let text = crate::io::problem::read_input(input)?;
+    let text = crate::io::json::read_input(input)?;
     let edited = with_medium(&text, input, medium)?;
     write_atomic(out, edited.as_bytes())
 }

@@ -21,10 +21,11 @@ pub mod scene_buffers;
 pub mod window;
 
 use crate::error::{Error, Result};
-use crate::io::problem::{parse_json, read_input};
-use crate::io::{Problem, check_not_input, write_atomic};
+use crate::io::json::{parse_json, read_input};
+use crate::io::{check_not_input, write_atomic};
 use crate::medium::LogisticMedium;
 use crate::plot::ImageFormat;
+use crate::problem::Problem;
 use crate::render::output::{ToneMap, encode_png};
 use crate::render::{RenderOptions, Shading};
 use crate::scene::Scene;

@@ -36,7 +36,7 @@
 
 use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
-use crate::io::problem::{parse_json, read_input};
+use crate::io::json::{parse_json, read_input};
 use crate::medium::LogisticMedium;
 use crate::render::glare::{self, AngularGlare};
 use glam::DVec3;
@@ -384,15 +384,7 @@ fn check_finite3(path: &Path, field: &str, c: [f64; 3]) -> Result<DVec3> {
 }
 
 fn positive(path: &Path, field: &str, v: f64) -> Result<f64> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(Error::input(
-            path,
-            field,
-            format!("must be a finite number > 0, got {v}"),
-        ))
-    }
+    crate::validate::positive(field, v).map_err(|e| e.in_file(path))
 }
 
 impl CameraSettings {

@@ -1,0 +1,110 @@
+//! A problem's pairs evaluated at one medium: each pair's endpoint, distance,
+//! residual and flags, and the totals F, summed and largest distance. This is
+//! what `mirage trace` writes and what a fit result reports at its end point.
+
+use crate::medium::{IndexField, LogisticMedium};
+use crate::problem::{Problem, TraceSpec};
+use crate::trace::{End, RayState, Stats};
+use serde::Serialize;
+
+/// One pair's traced outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct PairReport {
+    /// Where the ray ended (on the target plane unless `unreachable`).
+    pub endpoint: [f64; 3],
+    /// The target.
+    pub target: [f64; 3],
+    /// |endpoint − target| (metres).
+    pub distance: f64,
+    /// w·(endpoint − target).
+    pub residual: [f64; 3],
+    /// The ray dipped below the ground before its target plane.
+    pub occluded: bool,
+    /// The ray never reached its target plane.
+    pub unreachable: bool,
+    /// Why the trace ended.
+    pub end: End,
+    /// Arc length travelled (metres).
+    pub arc_length: f64,
+    /// Integration statistics.
+    pub stats: Stats,
+}
+
+/// Totals over all pairs.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Totals {
+    /// F = ½ Σ |r_i|² (m²).
+    pub objective: f64,
+    /// Σ w_i d_i (m).
+    pub summed_distance: f64,
+    /// max d_i (m).
+    pub max_distance: f64,
+}
+
+/// The result of `mirage trace`.
+#[derive(Clone, Debug, Serialize)]
+pub struct TraceReport {
+    /// Problem name.
+    pub problem: String,
+    /// The medium traced.
+    pub medium: LogisticMedium,
+    /// Trace settings used.
+    pub trace: TraceSpec,
+    /// Totals.
+    #[serde(flatten)]
+    pub totals: Totals,
+    /// Per pair.
+    pub pairs: Vec<PairReport>,
+    /// Integration statistics summed over pairs.
+    pub stats: Stats,
+}
+
+/// Traces every pair of `problem` through `medium` and reports endpoints,
+/// distances, flags and totals. Pairs are traced in parallel; the result does
+/// not depend on the number of threads.
+pub fn trace_pairs(problem: &Problem, medium: &LogisticMedium) -> TraceReport {
+    use rayon::prelude::*;
+    let field = medium.field();
+    let pairs: Vec<PairReport> = problem
+        .pairs
+        .par_iter()
+        .map(|pair| pair_report(pair, &field, &problem.trace, None))
+        .collect();
+    let mut totals = Totals::default();
+    let mut stats = Stats::default();
+    for (p, pr) in problem.pairs.iter().zip(&pairs) {
+        totals.objective += 0.5 * pr.residual.iter().map(|r| r * r).sum::<f64>();
+        totals.summed_distance += p.weight * pr.distance;
+        totals.max_distance = totals.max_distance.max(pr.distance);
+        stats += pr.stats;
+    }
+    TraceReport {
+        problem: problem.name.clone(),
+        medium: medium.clone(),
+        trace: problem.trace_spec.clone(),
+        totals,
+        pairs,
+        stats,
+    }
+}
+
+/// Traces one pair (optionally recording its path).
+pub fn pair_report<F: IndexField + ?Sized>(
+    pair: &crate::pair::PointPair,
+    field: &F,
+    options: &crate::trace::TraceOptions,
+    path: Option<&mut Vec<RayState>>,
+) -> PairReport {
+    let (t, r) = pair.evaluate::<f64, _>(field, options, path);
+    PairReport {
+        endpoint: t.endpoint.to_array(),
+        target: pair.target,
+        distance: (t.endpoint - pair.target()).norm(),
+        residual: r.to_array(),
+        occluded: t.occluded,
+        unreachable: t.unreachable,
+        end: t.end,
+        arc_length: t.arc_length,
+        stats: t.stats,
+    }
+}

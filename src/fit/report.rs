@@ -1,0 +1,101 @@
+//! The result of a fit, as `mirage fit -o` writes it (`docs/problem-format.md`,
+//! "The result of a fit").
+
+use crate::evaluate::{PairReport, Totals};
+use crate::medium::LogisticMedium;
+use crate::problem::{SolverMethod, TraceSpec};
+use serde::Serialize;
+
+/// One free parameter in a fit result.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParamReport {
+    /// Path name (`hotspots[0].radius`).
+    pub name: String,
+    /// Value in the problem file.
+    pub start: f64,
+    /// Fitted value.
+    pub value: f64,
+    /// Standard error; `null` when the pairs do not determine the parameter.
+    pub standard_error: Option<f64>,
+    /// Whether the pairs determine it.
+    pub determined: bool,
+    /// `[low, high]` if bounded.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<[f64; 2]>,
+    /// The fitted value sits on a bound.
+    pub at_bound: bool,
+}
+
+/// One solver run, summarised.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// `lm`, `lm (start 3)`, `nelder-mead`, `lm (polish)`.
+    pub label: String,
+    /// Starting parameters.
+    pub start: Vec<f64>,
+    /// Final parameters.
+    pub end: Vec<f64>,
+    /// Final objective F (m²).
+    pub objective: f64,
+    /// Iterations.
+    pub iterations: u64,
+    /// Why it stopped.
+    pub stop_reason: String,
+    /// Whether the solver reports convergence.
+    pub converged: bool,
+}
+
+/// The solver's account of the fit.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolverReport {
+    /// `lm`, `nelder-mead` or `auto`.
+    pub method: SolverMethod,
+    /// The run whose result was kept.
+    pub best_run: String,
+    /// Iterations over all runs.
+    pub iterations: u64,
+    /// Residual evaluations (each traces every pair).
+    pub residual_evaluations: u64,
+    /// Jacobian evaluations (each traces every pair with dual numbers).
+    pub jacobian_evaluations: u64,
+    /// Evaluations of the ray equation's right-hand side, over everything.
+    pub rhs_evaluations: u64,
+    /// Wall time of the fit (seconds).
+    pub wall_time_s: f64,
+    /// Why the kept run stopped.
+    pub stop_reason: String,
+    /// Whether the kept run converged.
+    pub converged: bool,
+    /// Whether F ≤ the target objective.
+    pub reached_target: bool,
+    /// The target objective (m²).
+    pub target_objective: f64,
+}
+
+/// The result of `mirage fit` (`problem-format.md`, "The result of a fit").
+#[derive(Clone, Debug, Serialize)]
+pub struct FitReport {
+    /// Problem name.
+    pub problem: String,
+    /// The fitted medium, in the problem schema (reusable as input).
+    pub medium: LogisticMedium,
+    /// The free parameters.
+    pub parameters: Vec<ParamReport>,
+    /// Parameter combinations the pairs cannot determine.
+    pub undetermined: Vec<crate::fit::identify::NullDirection>,
+    /// Whether the standard errors are scaled by the residual variance.
+    pub standard_errors_scaled: bool,
+    /// Totals at the fitted medium.
+    #[serde(flatten)]
+    pub totals: Totals,
+    /// Per pair, at the fitted medium.
+    pub pairs: Vec<PairReport>,
+    /// Solver summary.
+    pub solver: SolverReport,
+    /// Every run.
+    pub runs: Vec<RunReport>,
+    /// Objective and parameters per iteration, per run.
+    pub history: crate::fit::History,
+    /// Trace settings used.
+    pub trace: TraceSpec,
+}

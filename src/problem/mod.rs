@@ -1,0 +1,207 @@
+//! Problem files (`problem-format.md`): load, validate, and turn into a
+//! [`Problem`] the rest of mirage can trust.
+//!
+//! ```json
+//! {
+//!   "name": "desert-road",
+//!   "description": "Hot asphalt: the sky appears as water below the horizon.",
+//!   "medium": { "scale": 1.0, "background": { "n": 1.0, "a": 40.0 },
+//!               "hotspots": [ { "x": 0, "z": 600, "radius": 120, "n": -2, "a": -0.4 } ] },
+//!   "free": ["hotspots[0].n", "hotspots[0].radius"],
+//!   "bounds": { "hotspots[0].radius": [1.0, 500.0] },
+//!   "pairs": [ { "origin": [0, 1.6, 0], "through": [0, -1.2, 900], "target": [0, 30, 900] } ],
+//!   "trace":  { "method": "rk4", "step": 1.0 },
+//!   "solver": { "method": "lm", "max_iterations": 200 }
+//! }
+//! ```
+//!
+//! | field | meaning |
+//! | --- | --- |
+//! | `medium` | the starting medium ([`LogisticMedium`]); a term left out is not modelled |
+//! | `free` | parameters the fit may change, by path name; absent: trace and report only |
+//! | `bounds` | optional `[low, high]` per free parameter |
+//! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight` |
+//! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
+//! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12) |
+
+mod solver;
+mod trace;
+
+pub use solver::{SolverMethod, SolverSettings, SolverSpec, solver_settings};
+pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
+
+use crate::error::{Error, Result};
+use crate::io::json::{parse_json, read_input};
+use crate::medium::{LogisticMedium, Param};
+use crate::pair::PointPair;
+use crate::trace::TraceOptions;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The problem file exactly as written.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProblemFile {
+    /// Short name.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// What a user would see.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Starting medium.
+    pub medium: LogisticMedium,
+    /// Free parameters by path name.
+    #[serde(default)]
+    pub free: Vec<String>,
+    /// Bounds per free parameter.
+    #[serde(default)]
+    pub bounds: BTreeMap<String, [f64; 2]>,
+    /// The point pairs.
+    pub pairs: Vec<PointPair>,
+    /// Integration settings.
+    #[serde(default)]
+    pub trace: TraceSpec,
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+}
+
+/// A validated problem.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// Where it was read from (for messages).
+    pub source: PathBuf,
+    /// Short name (the file stem if the file has none).
+    pub name: String,
+    /// What a user would see.
+    pub description: String,
+    /// Starting medium (valid per `model.md`).
+    pub medium: LogisticMedium,
+    /// Free parameters, in the order of the file.
+    pub free: Vec<Param>,
+    /// `[low, high]` per free parameter (±∞ where unbounded).
+    pub bounds: Vec<(f64, f64)>,
+    /// The point pairs.
+    pub pairs: Vec<PointPair>,
+    /// Integration settings.
+    pub trace: TraceOptions,
+    /// The `trace` section, normalised (echoed in results).
+    pub trace_spec: TraceSpec,
+    /// Solver settings.
+    pub solver: SolverSettings,
+}
+
+impl Problem {
+    /// Reads and validates a problem file.
+    pub fn load(path: &Path) -> Result<Problem> {
+        Problem::parse(&read_input(path)?, path)
+    }
+
+    /// Parses and validates the text of a problem file; `path` is only used in
+    /// messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Problem> {
+        let file: ProblemFile = parse_json(text, path, "problem")?;
+        Problem::from_file(file, path)
+    }
+
+    /// Validates a parsed problem file.
+    pub fn from_file(file: ProblemFile, path: &Path) -> Result<Problem> {
+        let bad = |field: String, message: String| Error::input(path, field, message);
+        file.medium
+            .validate()
+            .map_err(|e| bad(format!("medium.{}", e.field), e.message))?;
+
+        for (i, pair) in file.pairs.iter().enumerate() {
+            pair.validate()
+                .map_err(|(f, m)| bad(format!("pairs[{i}].{f}"), m))?;
+        }
+
+        let mut free = Vec::with_capacity(file.free.len());
+        for (i, name) in file.free.iter().enumerate() {
+            let p: Param = name.parse().map_err(|e: crate::medium::ParamParseError| {
+                bad(format!("free[{i}]"), e.to_string())
+            })?;
+            if file.medium.get(p).is_none() {
+                return Err(bad(
+                    format!("free[{i}]"),
+                    format!(
+                        "`{name}` is not a parameter of this medium: {}",
+                        file.medium.absent_reason(p)
+                    ),
+                ));
+            }
+            if free.contains(&p) {
+                return Err(bad(
+                    format!("free[{i}]"),
+                    format!("`{name}` is listed twice"),
+                ));
+            }
+            free.push(p);
+        }
+        if !free.is_empty() && file.pairs.is_empty() {
+            return Err(bad(
+                "pairs".into(),
+                format!(
+                    "{} free parameter(s) but no point pairs to fit them to",
+                    free.len()
+                ),
+            ));
+        }
+
+        let mut bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); free.len()];
+        for (name, &[low, high]) in &file.bounds {
+            let field = format!("bounds.{name}");
+            let p: Param = name
+                .parse()
+                .map_err(|e: crate::medium::ParamParseError| bad(field.clone(), e.to_string()))?;
+            let Some(k) = free.iter().position(|q| *q == p) else {
+                return Err(bad(
+                    field,
+                    format!(
+                        "`{name}` is not a free parameter; bounds apply only to parameters listed in `free`"
+                    ),
+                ));
+            };
+            if low.is_nan() || high.is_nan() {
+                return Err(bad(field, "bounds must be numbers".into()));
+            }
+            if low > high {
+                return Err(bad(
+                    field,
+                    format!("low bound {low} is above high bound {high}"),
+                ));
+            }
+            let start = file.medium.get(p).unwrap_or(f64::NAN);
+            if !(low..=high).contains(&start) {
+                return Err(bad(
+                    field,
+                    format!(
+                        "the starting value {start} of `{name}` lies outside its bounds [{low}, {high}]"
+                    ),
+                ));
+            }
+            bounds[k] = (low, high);
+        }
+
+        let (trace, trace_spec) = trace_options(&file.trace, path)?;
+        let solver = solver_settings(&file.solver, path)?;
+        let name = file.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "problem".into())
+        });
+        Ok(Problem {
+            source: path.to_path_buf(),
+            name,
+            description: file.description.clone().unwrap_or_default(),
+            medium: file.medium,
+            free,
+            bounds,
+            pairs: file.pairs,
+            trace,
+            trace_spec,
+            solver,
+        })
+    }
+}

@@ -1,0 +1,150 @@
+//! The `solver` section of a problem: as written ([`SolverSpec`]) and validated
+//! ([`SolverSettings`]), which is what the fit runs with.
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The `solver` section as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// `lm`, `nelder-mead` or `auto`.
+    #[serde(default = "default_solver")]
+    pub method: String,
+    /// Iteration limit per start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_iterations: Option<u64>,
+    /// Number of starting points tried when the first start stalls (`auto`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub starts: Option<usize>,
+    /// Relative reduction of the objective below which LM stops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ftol: Option<f64>,
+    /// Relative step below which LM stops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub xtol: Option<f64>,
+    /// Scaled gradient below which LM stops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gtol: Option<f64>,
+    /// Seed of the starting points (restarts are reproducible).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Objective F (m²) below which a fit counts as reaching its targets; above
+    /// it, `auto` restarts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_objective: Option<f64>,
+}
+
+fn default_solver() -> String {
+    "auto".into()
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec {
+            method: default_solver(),
+            max_iterations: None,
+            starts: None,
+            ftol: None,
+            xtol: None,
+            gtol: None,
+            seed: None,
+            target_objective: None,
+        }
+    }
+}
+
+/// Which optimiser fits the free parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverMethod {
+    /// Levenberg–Marquardt on exact Jacobians.
+    Lm,
+    /// Nelder–Mead simplex (derivative-free).
+    NelderMead,
+    /// LM; if it stalls above tolerance, restarts in parallel and a Nelder–Mead
+    /// fallback, the best polished by LM.
+    Auto,
+}
+
+impl SolverMethod {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverMethod::Lm => "lm",
+            SolverMethod::NelderMead => "nelder-mead",
+            SolverMethod::Auto => "auto",
+        }
+    }
+}
+
+/// Validated solver settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// The optimiser.
+    pub method: SolverMethod,
+    /// Iteration limit per start.
+    pub max_iterations: u64,
+    /// Starting points for restarts.
+    pub starts: usize,
+    /// LM ftol.
+    pub ftol: f64,
+    /// LM xtol.
+    pub xtol: f64,
+    /// LM gtol.
+    pub gtol: f64,
+    /// Seed of the restart points.
+    pub seed: u64,
+    /// F (m²) below which the targets count as reached.
+    pub target_objective: f64,
+}
+
+/// Validates a `solver` section.
+pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings> {
+    let method = match spec.method.as_str() {
+        "lm" => SolverMethod::Lm,
+        "nelder-mead" => SolverMethod::NelderMead,
+        "auto" => SolverMethod::Auto,
+        other => {
+            return Err(Error::input(
+                path,
+                "solver.method",
+                format!("unknown method `{other}` (expected `lm`, `nelder-mead` or `auto`)"),
+            ));
+        }
+    };
+    let tol = |field: &str, v: Option<f64>, default: f64| -> Result<f64> {
+        match v {
+            None => Ok(default),
+            Some(v) if v.is_finite() && v >= 0.0 => Ok(v),
+            Some(v) => Err(Error::input(
+                path,
+                format!("solver.{field}"),
+                format!("must be a finite number ≥ 0, got {v}"),
+            )),
+        }
+    };
+    let max_iterations = spec.max_iterations.unwrap_or(200);
+    if max_iterations == 0 {
+        return Err(Error::input(
+            path,
+            "solver.max_iterations",
+            "must be at least 1",
+        ));
+    }
+    let starts = spec.starts.unwrap_or(8);
+    if starts == 0 {
+        return Err(Error::input(path, "solver.starts", "must be at least 1"));
+    }
+    Ok(SolverSettings {
+        method,
+        max_iterations,
+        starts,
+        ftol: tol("ftol", spec.ftol, 1e-15)?,
+        xtol: tol("xtol", spec.xtol, 1e-12)?,
+        gtol: tol("gtol", spec.gtol, 1e-15)?,
+        seed: spec.seed.unwrap_or(0x6d69_7261_6765),
+        target_objective: tol("target_objective", spec.target_objective, 1e-12)?,
+    })
+}
