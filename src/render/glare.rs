@@ -48,6 +48,10 @@
 //! | `epsilon` | truncation error, relative to the sources' peaks | 1e-3 |
 //! | `kernels` | `gaussian` (`sigma`, degrees) or `compact` (`radius`, degrees), each with the `weight` of light it spreads | Gaussian 0.08° (0.004), Gaussian 0.5° (0.0015), compact 2° (0.0005) |
 
+pub use crate::scene::glare::{
+    AngularGlare, DEFAULT_EPSILON, DEFAULT_THRESHOLD, Kernel, WeightedKernel, default_kernels,
+};
+
 use nalgebra::Complex;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -58,21 +62,6 @@ pub type C64 = Complex<f64>;
 /// The narrowest kernel drawn (pixels): narrower glare is no wider than the
 /// source pixel itself, and would only inflate the series' order.
 pub const MIN_KERNEL_PIXELS: f64 = 1.5;
-
-/// A bell-shaped kernel with peak 1, radial in the image plane (pixels).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Kernel {
-    /// e^(−u²/2σ²).
-    Gaussian {
-        /// Standard deviation (pixels).
-        sigma: f64,
-    },
-    /// (1 − u²/r²)³ inside radius r, zero outside.
-    Compact {
-        /// Radius (pixels).
-        radius: f64,
-    },
-}
 
 impl Kernel {
     /// The kernel's value at squared distance `u2` from its centre.
@@ -357,15 +346,6 @@ impl FourierSeries {
     }
 }
 
-/// A kernel of the glare and the fraction of a source's light it spreads.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WeightedKernel {
-    /// Shape, in pixels.
-    pub kernel: Kernel,
-    /// Fraction of the source's light it carries.
-    pub weight: f64,
-}
-
 /// What [`apply`] needs: kernels in pixels, the source threshold and ε.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GlareSettings {
@@ -375,43 +355,6 @@ pub struct GlareSettings {
     pub threshold: f64,
     /// Truncation error relative to the sources' peaks.
     pub epsilon: f64,
-}
-
-/// A scene's glare with kernel sizes in degrees (what scene files say);
-/// [`AngularGlare::in_pixels`] turns it into [`GlareSettings`] for a camera.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AngularGlare {
-    /// Kernels with `sigma`/`radius` in degrees and weights already scaled by
-    /// the strength.
-    pub kernels: Vec<WeightedKernel>,
-    /// Source threshold (luminance, linear units).
-    pub threshold: f64,
-    /// Truncation error relative to the sources' peaks.
-    pub epsilon: f64,
-}
-
-/// Default source threshold (luminance).
-pub const DEFAULT_THRESHOLD: f64 = 20.0;
-/// Default truncation error.
-pub const DEFAULT_EPSILON: f64 = 1e-3;
-
-/// The default glare: a narrow bloom, a wider veil, and a compact halo
-/// (sizes in degrees).
-pub fn default_kernels() -> Vec<WeightedKernel> {
-    vec![
-        WeightedKernel {
-            kernel: Kernel::Gaussian { sigma: 0.08 },
-            weight: 0.004,
-        },
-        WeightedKernel {
-            kernel: Kernel::Gaussian { sigma: 0.5 },
-            weight: 0.0015,
-        },
-        WeightedKernel {
-            kernel: Kernel::Compact { radius: 2.0 },
-            weight: 0.0005,
-        },
-    ]
 }
 
 impl AngularGlare {

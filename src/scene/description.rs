@@ -26,7 +26,7 @@
 //! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
 //! | `sun` | `elevation`, `azimuth` (degrees; azimuth from +z toward +x), `irradiance` (default 3.5, linear units), `color` (default white) |
 //! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional), or `{"type": "physical", ...}`: Rayleigh + Mie single scattering with ozone, sun disc and stars (options in [`crate::render::atmosphere`]) |
-//! | `glare` | veiling glare of the sun and its mirage images: `enabled`, `strength`, `threshold`, `epsilon`, `kernels` ([`crate::render::glare`]); absent: none |
+//! | `glare` | veiling glare of the sun and its mirage images: `enabled`, `strength`, `threshold`, `epsilon`, `kernels` ([`crate::scene::glare`]); absent: none |
 //! | `exposure` | multiplies the radiance before tone mapping (default 1) |
 //! | `samples_per_pixel` | default 1 (the pixel centre); more: a low-discrepancy pattern inside the pixel |
 //! | `trace` | `step`: the RK4 step (metres, default 4), `max_distance`: the arc length after which a ray sees the sky along its final direction (metres, default 20000) |
@@ -34,11 +34,11 @@
 //! Exactly one of `medium` and `medium_from` is given; unknown fields anywhere are
 //! errors, and every error names the file and the field.
 
+use super::glare::{AngularGlare, GlareSpec};
 use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::LogisticMedium;
-use crate::render::glare::{self, AngularGlare};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -163,47 +163,6 @@ pub enum SkySpec {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         star_brightness: Option<f64>,
     },
-}
-
-/// One kernel of the `glare` section as written (sizes in degrees).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum GlareKernelSpec {
-    /// A Gaussian of standard deviation `sigma` degrees.
-    Gaussian {
-        /// Standard deviation (degrees).
-        sigma: f64,
-        /// Fraction of a source's light it spreads.
-        weight: f64,
-    },
-    /// (1 − u²/r²)³ within `radius` degrees.
-    Compact {
-        /// Radius (degrees).
-        radius: f64,
-        /// Fraction of a source's light it spreads.
-        weight: f64,
-    },
-}
-
-/// The `glare` section as written ([`crate::render::glare`]).
-#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GlareSpec {
-    /// On/off (default on).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub enabled: Option<bool>,
-    /// Multiplies every kernel's weight (default 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub strength: Option<f64>,
-    /// Luminance above which a pixel is a source (default 20).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub threshold: Option<f64>,
-    /// Truncation error relative to the sources' peaks (default 1e-3).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub epsilon: Option<f64>,
-    /// The kernels (default: bloom, veil and halo).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kernels: Option<Vec<GlareKernelSpec>>,
 }
 
 /// The `trace` section as written.
@@ -611,7 +570,7 @@ impl Scene {
         }
         let glare = match &file.glare {
             None => None,
-            Some(g) => glare_from_spec(g, path)?,
+            Some(g) => g.validate().map_err(|e| e.within("glare").in_file(path))?,
         };
         let exposure = positive(path, "exposure", file.exposure.unwrap_or(1.0))?;
         let samples_per_pixel = file.samples_per_pixel.unwrap_or(1);
@@ -651,88 +610,6 @@ impl Scene {
             max_distance,
         })
     }
-}
-
-/// Checks a `glare` section; `None` when it is switched off.
-fn glare_from_spec(g: &GlareSpec, path: &Path) -> Result<Option<AngularGlare>> {
-    if g.enabled == Some(false) {
-        return Ok(None);
-    }
-    let strength = g.strength.unwrap_or(1.0);
-    if !(strength.is_finite() && strength >= 0.0) {
-        return Err(Error::input(
-            path,
-            "glare.strength",
-            format!("must be a finite number ≥ 0, got {strength}"),
-        ));
-    }
-    let threshold = positive(
-        path,
-        "glare.threshold",
-        g.threshold.unwrap_or(glare::DEFAULT_THRESHOLD),
-    )?;
-    let epsilon = g.epsilon.unwrap_or(glare::DEFAULT_EPSILON);
-    if !(epsilon.is_finite() && (1e-8..=0.1).contains(&epsilon)) {
-        return Err(Error::input(
-            path,
-            "glare.epsilon",
-            format!("must be in [1e-8, 0.1], got {epsilon}"),
-        ));
-    }
-    let kernels = match &g.kernels {
-        None => glare::default_kernels(),
-        Some(list) => {
-            let mut out = Vec::with_capacity(list.len());
-            for (i, k) in list.iter().enumerate() {
-                let (kernel, weight, size, name) = match *k {
-                    GlareKernelSpec::Gaussian { sigma, weight } => {
-                        (glare::Kernel::Gaussian { sigma }, weight, sigma, "sigma")
-                    }
-                    GlareKernelSpec::Compact { radius, weight } => {
-                        (glare::Kernel::Compact { radius }, weight, radius, "radius")
-                    }
-                };
-                if !(size.is_finite() && size > 0.0 && size <= 90.0) {
-                    return Err(Error::input(
-                        path,
-                        format!("glare.kernels[{i}].{name}"),
-                        format!("must be in (0, 90] degrees, got {size}"),
-                    ));
-                }
-                if !(weight.is_finite() && (0.0..=1.0).contains(&weight)) {
-                    return Err(Error::input(
-                        path,
-                        format!("glare.kernels[{i}].weight"),
-                        format!("must be in [0, 1], got {weight}"),
-                    ));
-                }
-                out.push(glare::WeightedKernel { kernel, weight });
-            }
-            out
-        }
-    };
-    let kernels: Vec<glare::WeightedKernel> = kernels
-        .into_iter()
-        .map(|k| glare::WeightedKernel {
-            weight: k.weight * strength,
-            ..k
-        })
-        .collect();
-    let total: f64 = kernels.iter().map(|k| k.weight).sum();
-    if total > 1.0 {
-        return Err(Error::input(
-            path,
-            "glare.strength",
-            format!(
-                "the kernels would spread {total:.3} of a source's light (strength × Σ weights must be ≤ 1)"
-            ),
-        ));
-    }
-    Ok(Some(AngularGlare {
-        kernels,
-        threshold,
-        epsilon,
-    }))
 }
 
 /// Only the `medium` field of a result (or problem) file; every other field is
