@@ -66,16 +66,42 @@ pub struct Metrics {
 }
 
 /// Limits that make `mirage compare` fail (exit code 1) when missed.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
 pub struct Limits {
-    /// Largest acceptable RMSE.
+    /// Fail (exit code 1) if the RMSE is above this.
+    #[arg(long, value_parser = finite)]
     pub max_rmse: Option<f64>,
-    /// Smallest acceptable PSNR (dB).
+    /// Fail if the PSNR (dB) is below this.
+    #[arg(long, value_parser = finite)]
     pub min_psnr: Option<f64>,
-    /// Smallest acceptable SSIM.
+    /// Fail if the SSIM is below this.
+    #[arg(long, value_parser = finite)]
     pub min_ssim: Option<f64>,
-    /// Largest acceptable share of pixels over the threshold.
+    /// Fail if the share of pixels over the threshold (0 to 1) is above this.
+    #[arg(long, value_parser = finite)]
     pub max_share_over: Option<f64>,
+}
+
+/// A limit: any finite number.
+fn finite(s: &str) -> std::result::Result<f64, String> {
+    match s
+        .parse::<f64>()
+        .map_err(|_| format!("not a number: `{s}`"))?
+    {
+        v if v.is_finite() => Ok(v),
+        v => Err(format!("must be a finite number, got {v}")),
+    }
+}
+
+/// `--threshold`: a finite number > 0.
+fn threshold(s: &str) -> std::result::Result<f64, String> {
+    match s
+        .parse::<f64>()
+        .map_err(|_| format!("not a number: `{s}`"))?
+    {
+        v if v.is_finite() && v > 0.0 => Ok(v),
+        v => Err(format!("must be a finite number > 0, got {v}")),
+    }
 }
 
 impl Limits {
@@ -393,20 +419,24 @@ pub fn heat_map_png(
     Ok(bytes.into_inner())
 }
 
-/// The arguments of `mirage compare`.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Compare an image with a reference: RMSE, PSNR, SSIM, share of pixels over a threshold.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct CompareOptions {
-    /// Our image.
+    /// Our image (.png, .exr or .npy).
     pub ours: PathBuf,
-    /// The reference image.
+    /// The reference image (.png, .exr or .npy).
     pub reference: PathBuf,
-    /// Per-pixel threshold (default [`DEFAULT_THRESHOLD`]).
+    /// A pixel differs when its largest channel difference exceeds this.
+    #[arg(long, value_parser = threshold)]
     pub threshold: Option<f64>,
-    /// Write the heat map here (`.png`).
+    /// Write the difference heat map here (.png).
+    #[arg(long)]
     pub diff: Option<PathBuf>,
     /// Write the metrics as JSON here.
+    #[arg(long)]
     pub json: Option<PathBuf>,
     /// Limits that fail the command when missed.
+    #[command(flatten)]
     pub limits: Limits,
 }
 
@@ -432,31 +462,7 @@ pub fn table(m: &Metrics) -> String {
 /// and JSON if asked, and fails (exit code 1) when a limit is missed; the
 /// outputs are written first, so a failed comparison still leaves its evidence.
 pub fn compare_command(o: &CompareOptions) -> Result<Metrics> {
-    let cli = Path::new("<command line>");
     let threshold = o.threshold.unwrap_or(DEFAULT_THRESHOLD);
-    if !(threshold.is_finite() && threshold > 0.0) {
-        return Err(Error::input(
-            cli,
-            "--threshold",
-            format!("must be a finite number > 0, got {threshold}"),
-        ));
-    }
-    for (flag, v) in [
-        ("--max-rmse", o.limits.max_rmse),
-        ("--min-psnr", o.limits.min_psnr),
-        ("--min-ssim", o.limits.min_ssim),
-        ("--max-share-over", o.limits.max_share_over),
-    ] {
-        if let Some(v) = v
-            && !v.is_finite()
-        {
-            return Err(Error::input(
-                cli,
-                flag,
-                format!("must be a finite number, got {v}"),
-            ));
-        }
-    }
     let inputs = [o.ours.as_path(), o.reference.as_path()];
     if let Some(d) = &o.diff {
         if crate::plot::ImageFormat::from_path(d)? != crate::plot::ImageFormat::Png {

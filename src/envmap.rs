@@ -105,23 +105,40 @@ pub fn lookup_error(sky: &dyn Sky, map: &[[f32; 3]], width: u32, height: u32, ba
     worst
 }
 
-/// The arguments of `mirage sky`.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Write a scene's sky as a lat-long environment map (Mitsuba's envmap convention).
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct SkyOptions {
-    /// Scene file.
+    /// Scene file (JSON).
     pub scene: PathBuf,
-    /// Output (`.exr`).
+    /// Output (.exr).
+    #[arg(short, long)]
     pub output: PathBuf,
-    /// Width (texels, default 1024).
+    /// Width in texels (default 1024).
+    #[arg(long, value_parser = map_side)]
     pub width: Option<u32>,
-    /// Height (texels, default width / 2).
+    /// Height in texels (default width / 2; taller maps are more accurate near the horizon).
+    #[arg(long, value_parser = map_side)]
     pub height: Option<u32>,
+}
+
+/// `--width`/`--height` of a sky map: 2 to [`MAX_SIDE`] texels.
+fn map_side(s: &str) -> std::result::Result<u32, String> {
+    match s
+        .parse::<u32>()
+        .map_err(|_| format!("not a whole number: `{s}`"))?
+    {
+        v if (2..=MAX_SIDE).contains(&v) => Ok(v),
+        v => Err(side_message(v)),
+    }
+}
+
+fn side_message(v: u32) -> String {
+    format!("must be between 2 and {MAX_SIDE} texels, got {v}")
 }
 
 /// `mirage sky`: bakes the scene's sky into a lat-long EXR and prints the
 /// lookup error within ±2° of the horizon.
 pub fn sky_command(o: &SkyOptions) -> Result<f64> {
-    let cli = Path::new("<command line>");
     let scene = Scene::load(&o.scene)?;
     let ext = o
         .output
@@ -139,14 +156,9 @@ pub fn sky_command(o: &SkyOptions) -> Result<f64> {
     check_not_input(&o.output, &inputs)?;
     let width = o.width.unwrap_or(1024);
     let height = o.height.unwrap_or(width.div_ceil(2));
-    for (flag, v) in [("--width", width), ("--height", height)] {
-        if !(2..=MAX_SIDE).contains(&v) {
-            return Err(Error::input(
-                cli,
-                flag,
-                format!("must be between 2 and {MAX_SIDE} texels, got {v}"),
-            ));
-        }
+    // The flags are in range; the height derived from a width of 2 is not.
+    if height < 2 {
+        return Err(Error::usage("--height", side_message(height)));
     }
     // A map holds nothing finer than a texel: features the sky sizes by the
     // pixel (the stars) are sized by the texel's height instead.

@@ -6,7 +6,7 @@
 
 #![warn(missing_docs)]
 
-pub mod app;
+pub mod cli;
 pub mod compare;
 pub mod envmap;
 pub mod error;

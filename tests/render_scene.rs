@@ -267,13 +267,13 @@ fn bad_scenes_are_refused_with_file_and_field() {
         GOOD,
         &[],
         &["-o", "out.png", "--spp", "0"],
-        &["<command line>", "--spp"],
+        &["error: --spp: must be between 1 and"],
     );
     rejects(
         GOOD,
         &[],
         &["-o", "out.png", "--width", "0"],
-        &["<command line>", "--width"],
+        &["error: --width: must be between 1 and"],
     );
     rejects(
         GOOD,

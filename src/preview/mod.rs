@@ -167,45 +167,51 @@ pub fn apply_glare(
     Some(crate::render::glare::apply(pixels, w, h, &settings))
 }
 
-/// The arguments of `mirage preview`.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct PreviewOptions {
-    /// Scene or problem file.
+    /// Scene or problem file (JSON).
     pub input: PathBuf,
-    /// No window: render one frame to `output`.
+    /// No window: render one frame offscreen (to --output).
+    #[arg(long)]
     pub headless: bool,
-    /// The headless frame (.png, tone-mapped like `mirage render`'s).
+    /// The headless frame (.png).
+    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Frame width (pixels).
+    /// Frame width in pixels (default: the scene's, or the window's).
+    #[arg(long, value_parser = crate::render::image_side)]
     pub width: Option<u32>,
-    /// Frame height (pixels).
+    /// Frame height in pixels.
+    #[arg(long, value_parser = crate::render::image_side)]
     pub height: Option<u32>,
-    /// Albedo shading.
+    /// Show the albedo of what each ray hits.
+    #[arg(long)]
     pub albedo: bool,
-    /// Straight rays.
+    /// Straight rays (δ ≡ 0), for comparison.
+    #[arg(long)]
     pub straight: bool,
-    /// Headless: time frames and print ms/frame.
+    /// With --headless: print the time per frame (1280×720 unless sized).
+    #[arg(long)]
     pub bench: bool,
-    /// Window: close after this many frames (for tests and screenshots).
+    /// Close the window after this many frames.
+    #[arg(long, value_parser = frame_count)]
     pub frames: Option<u64>,
-    /// Window: save the last frame with its panels here (.png).
+    /// Save the window (frame and panels) here when it closes (.png).
+    #[arg(long)]
     pub screenshot: Option<PathBuf>,
     /// Leave out the scene's veiling glare.
+    #[arg(long)]
     pub no_glare: bool,
 }
 
-fn check_side(field: &str, v: Option<u32>) -> Result<Option<u32>> {
-    let cli = Path::new("<command line>");
-    match v {
-        Some(v) if v == 0 || v > crate::scene::description::MAX_IMAGE_SIDE => Err(Error::input(
-            cli,
-            field,
-            format!(
-                "must be between 1 and {} pixels, got {v}",
-                crate::scene::description::MAX_IMAGE_SIDE
-            ),
-        )),
-        v => Ok(v),
+/// `--frames`: at least 1.
+fn frame_count(s: &str) -> std::result::Result<u64, String> {
+    match s
+        .parse::<u64>()
+        .map_err(|_| format!("not a whole number: `{s}`"))?
+    {
+        0 => Err("must be at least 1".into()),
+        n => Ok(n),
     }
 }
 
@@ -238,9 +244,7 @@ fn frame_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u
 /// `mirage preview`: the window, or with `headless` one frame to a PNG (and
 /// with `bench` the time per frame).
 pub fn preview_command(o: &PreviewOptions) -> Result<()> {
-    let cli = Path::new("<command line>");
-    let width = check_side("--width", o.width)?;
-    let height = check_side("--height", o.height)?;
+    let (width, height) = (o.width, o.height);
     let mut input = load_input(&o.input)?;
     if o.no_glare {
         input.scene.glare = None;
@@ -253,12 +257,8 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
     if let Some(shot) = &o.screenshot {
         check_png(shot, &inputs)?;
     }
-    if o.frames == Some(0) {
-        return Err(Error::input(cli, "--frames", "must be at least 1"));
-    }
     if o.headless && (o.frames.is_some() || o.screenshot.is_some()) {
-        return Err(Error::input(
-            cli,
+        return Err(Error::usage(
             if o.frames.is_some() {
                 "--frames"
             } else {
@@ -269,8 +269,7 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
     }
     if !o.headless {
         if o.output.is_some() || o.bench {
-            return Err(Error::input(
-                cli,
+            return Err(Error::usage(
                 if o.bench { "--bench" } else { "--output" },
                 "only with --headless (the window saves with --screenshot)",
             ));
@@ -286,8 +285,7 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
         );
     }
     if o.output.is_none() && !o.bench {
-        return Err(Error::input(
-            cli,
+        return Err(Error::usage(
             "--output",
             "a headless preview needs an output image (-o frame.png) or --bench",
         ));

@@ -55,8 +55,8 @@ impl Default for SolverSpec {
     }
 }
 
-/// Which optimiser fits the free parameters.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// Which optimiser fits the free parameters (also `mirage fit --method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum SolverMethod {
     /// Levenberg–Marquardt on exact Jacobians.

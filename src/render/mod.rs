@@ -525,42 +525,99 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Rendered {
     Renderer::new(scene, options).render()
 }
 
-/// The arguments of `mirage render`.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Render a scene seen through its air along curved rays.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct CommandOptions {
-    /// Scene file.
+    /// Scene file (JSON).
     pub scene: PathBuf,
-    /// Tone-mapped sRGB PNG output.
+    /// Output image (.png, tone-mapped sRGB).
+    #[arg(short, long)]
     pub output: PathBuf,
-    /// Linear EXR output.
+    /// Also write the linear HDR image here (.exr).
+    #[arg(long)]
     pub exr: Option<PathBuf>,
-    /// Albedo shading.
+    /// Show the albedo of what each ray hits (the sky's colour for a miss).
+    #[arg(long)]
     pub albedo: bool,
-    /// δ ≡ 0.
+    /// Straight rays (δ ≡ 0), for comparison.
+    #[arg(long)]
     pub straight: bool,
-    /// Samples per pixel.
+    /// Samples per pixel (overrides the scene).
+    #[arg(long, value_parser = samples_per_pixel)]
     pub spp: Option<u32>,
-    /// Image width.
+    /// Image width in pixels (overrides the scene).
+    #[arg(long, value_parser = image_side)]
     pub width: Option<u32>,
-    /// Image height.
+    /// Image height in pixels (overrides the scene).
+    #[arg(long, value_parser = image_side)]
     pub height: Option<u32>,
-    /// `plain`, `enhanced` or `quadric`.
-    pub tracer: Option<String>,
-    /// Integrate every ray even in stratified air.
+    /// Sphere tracer.
+    #[arg(long, value_enum, default_value_t)]
+    pub tracer: TracerKind,
+    /// Integrate every ray, even where a table of paths could be reused.
+    #[arg(long)]
     pub no_path_reuse: bool,
-    /// No progress bar, no summary.
-    pub quiet: bool,
-    /// The hit tolerance as a fraction of a pixel's footprint (default
-    /// [`RenderOptions::default`]'s); smaller for validation renders.
-    pub hit_fraction: Option<f64>,
-    /// Leave the scene's glare out.
+    /// Leave out the scene's veiling glare.
+    #[arg(long)]
     pub no_glare: bool,
+    /// No progress bar and no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Hit tolerance as a fraction of a pixel (default 0.001; larger: faster, objects grow).
+    #[arg(long, value_parser = hit_fraction)]
+    pub hit_fraction: Option<f64>,
+}
+
+/// The tracers by their command-line names ([`TracerKind::name`]).
+impl clap::ValueEnum for TracerKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[TracerKind::Plain, TracerKind::Enhanced, TracerKind::Quadric]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
+/// `--width`/`--height` of a render or preview: 1 to
+/// [`MAX_IMAGE_SIDE`](crate::scene::description::MAX_IMAGE_SIDE) pixels.
+pub(crate) fn image_side(s: &str) -> std::result::Result<u32, String> {
+    let max = crate::scene::description::MAX_IMAGE_SIDE;
+    match s
+        .parse::<u32>()
+        .map_err(|_| format!("not a whole number: `{s}`"))?
+    {
+        v if v == 0 || v > max => Err(format!("must be between 1 and {max} pixels, got {v}")),
+        v => Ok(v),
+    }
+}
+
+/// `--spp`: 1 to [`MAX_SAMPLES_PER_PIXEL`](crate::scene::description::MAX_SAMPLES_PER_PIXEL).
+fn samples_per_pixel(s: &str) -> std::result::Result<u32, String> {
+    let max = crate::scene::description::MAX_SAMPLES_PER_PIXEL;
+    match s
+        .parse::<u32>()
+        .map_err(|_| format!("not a whole number: `{s}`"))?
+    {
+        n if n == 0 || n > max => Err(format!("must be between 1 and {max}, got {n}")),
+        n => Ok(n),
+    }
+}
+
+/// `--hit-fraction`: in (0, 1].
+fn hit_fraction(s: &str) -> std::result::Result<f64, String> {
+    match s
+        .parse::<f64>()
+        .map_err(|_| format!("not a number: `{s}`"))?
+    {
+        f if f.is_finite() && f > 0.0 && f <= 1.0 => Ok(f),
+        f => Err(format!("must be in (0, 1] (fraction of a pixel), got {f}")),
+    }
 }
 
 /// `mirage render`: loads the scene, renders it and writes the PNG (and the
 /// EXR), atomically; prints a one-paragraph summary unless quiet.
 pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
-    let cli = Path::new("<command line>");
     let scene = Scene::load(&o.scene)?;
     match ImageFormat::from_path(&o.output)? {
         ImageFormat::Png => {}
@@ -593,57 +650,6 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
             ));
         }
     }
-    let side = |field: &str, v: Option<u32>| -> Result<Option<u32>> {
-        match v {
-            Some(v) if v == 0 || v > crate::scene::description::MAX_IMAGE_SIDE => {
-                Err(Error::input(
-                    cli,
-                    field,
-                    format!(
-                        "must be between 1 and {} pixels, got {v}",
-                        crate::scene::description::MAX_IMAGE_SIDE
-                    ),
-                ))
-            }
-            v => Ok(v),
-        }
-    };
-    let width = side("--width", o.width)?;
-    let height = side("--height", o.height)?;
-    if let Some(n) = o.spp
-        && (n == 0 || n > crate::scene::description::MAX_SAMPLES_PER_PIXEL)
-    {
-        return Err(Error::input(
-            cli,
-            "--spp",
-            format!(
-                "must be between 1 and {}, got {n}",
-                crate::scene::description::MAX_SAMPLES_PER_PIXEL
-            ),
-        ));
-    }
-    let tracer = match &o.tracer {
-        None => TracerKind::default(),
-        Some(name) => TracerKind::from_name(name).ok_or_else(|| {
-            Error::input(
-                cli,
-                "--tracer",
-                format!("unknown tracer `{name}` (expected `plain`, `enhanced` or `quadric`)"),
-            )
-        })?,
-    };
-    let default_hit = RenderOptions::default().hit_fraction;
-    let hit_fraction = match o.hit_fraction {
-        None => default_hit,
-        Some(f) if f.is_finite() && f > 0.0 && f <= 1.0 => f,
-        Some(f) => {
-            return Err(Error::input(
-                cli,
-                "--hit-fraction",
-                format!("must be in (0, 1] (fraction of a pixel), got {f}"),
-            ));
-        }
-    };
     let mut options = RenderOptions {
         shading: if o.albedo {
             Shading::Albedo
@@ -651,16 +657,18 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
             Shading::Lit
         },
         straight: o.straight,
-        tracer,
+        tracer: o.tracer,
         path_reuse: !o.no_path_reuse,
         samples_per_pixel: o.spp,
-        width,
-        height,
+        width: o.width,
+        height: o.height,
         progress: !o.quiet,
         glare: !o.no_glare,
         ..RenderOptions::default()
     };
-    options.hit_fraction = hit_fraction;
+    if let Some(f) = o.hit_fraction {
+        options.hit_fraction = f;
+    }
     let renderer = Renderer::new(&scene, &options);
     let image = renderer.render();
     let tone = match options.shading {

@@ -1,0 +1,167 @@
+//! `mirage fit`: the free parameters fitted so that every pair's ray lands on
+//! its target.
+
+use super::trace::describe_trace;
+use crate::error::Result;
+use crate::problem::SolverMethod;
+use crate::fit::report::FitReport;
+use crate::io::{check_not_input, write_json};
+use crate::problem::Problem;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Fit the free parameters so that every pair's ray lands on its target.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+pub struct FitOptions {
+    /// Problem file (JSON).
+    pub problem: PathBuf,
+    /// Write the JSON result here.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Convergence plot (.png or .svg).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Ray diagram of the fitted medium (.png or .svg).
+    #[arg(long)]
+    pub rays: Option<PathBuf>,
+    /// Solver (overrides the problem file).
+    #[arg(long, value_enum)]
+    pub method: Option<SolverMethod>,
+    /// No progress line.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Fits the free parameters, prints a summary, writes the result and plots.
+/// All outputs are checked before the fit and written atomically.
+pub fn run(options: &FitOptions) -> Result<FitReport> {
+    let problem_path = options.problem.as_path();
+    let mut problem = Problem::load(problem_path)?;
+    if let Some(m) = options.method {
+        problem.solver.method = m;
+    }
+    for out in [&options.output, &options.plot, &options.rays]
+        .into_iter()
+        .flatten()
+    {
+        check_not_input(out, &[problem_path])?;
+    }
+    for plot in [&options.plot, &options.rays].into_iter().flatten() {
+        crate::plot::ImageFormat::from_path(plot)?;
+    }
+    let bar = (!options.quiet).then(|| {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} {elapsed:>4} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        );
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        bar
+    });
+    let hook: Option<crate::fit::solve::IterateHook> = bar.clone().map(|bar| {
+        std::sync::Arc::new(move |label: &str, rec: &crate::fit::IterationRecord| {
+            bar.set_message(format!(
+                "{label}: iteration {} F = {:.3e} m²",
+                rec.iteration, rec.objective
+            ));
+        }) as crate::fit::solve::IterateHook
+    });
+    let report = crate::fit::fit(&problem, hook);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let report = report?;
+    if let Some(out) = &options.output {
+        write_json(out, &report)?;
+    }
+    if let Some(plot) = &options.plot {
+        crate::plot::draw_convergence(&report.history, plot)?;
+    }
+    if let Some(rays) = &options.rays {
+        crate::plot::draw_rays(&problem, &report.medium, rays)?;
+    }
+    print!("{}", fit_summary(&problem, &report));
+    Ok(report)
+}
+
+/// The terminal summary of a fit.
+pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
+    let mut s = String::new();
+    let sv = &r.solver;
+    let _ = writeln!(
+        s,
+        "{}: {} free parameter(s), {} pair(s), trace {}",
+        r.problem,
+        r.parameters.len(),
+        r.pairs.len(),
+        describe_trace(problem)
+    );
+    let _ = writeln!(
+        s,
+        "solver {} ({} run(s), best: {}): {} iterations, {} residual + {} Jacobian evaluations, {:.3} s",
+        sv.method.name(),
+        r.runs.len(),
+        sv.best_run,
+        sv.iterations,
+        sv.residual_evaluations,
+        sv.jacobian_evaluations,
+        sv.wall_time_s
+    );
+    let _ = writeln!(s, "stopped: {}", sv.stop_reason);
+    let _ = writeln!(
+        s,
+        "objective F = {:.6e} m² ({} target {:.1e})   summed distance = {:.4e} m   largest = {:.4e} m",
+        r.totals.objective,
+        if sv.reached_target { "meets" } else { "ABOVE" },
+        sv.target_objective,
+        r.totals.summed_distance,
+        r.totals.max_distance
+    );
+    if !r.parameters.is_empty() {
+        let _ = writeln!(
+            s,
+            "{:<24} {:>14} {:>16} {:>12}",
+            "parameter", "start", "fitted", "std. error"
+        );
+        for p in &r.parameters {
+            let se = match p.standard_error {
+                Some(e) => format!("{e:.3e}"),
+                None => "undetermined".into(),
+            };
+            let _ = writeln!(
+                s,
+                "{:<24} {:>14.6} {:>16.9} {:>12}{}",
+                p.name,
+                p.start,
+                p.value,
+                se,
+                if p.at_bound { "  (at bound)" } else { "" }
+            );
+        }
+    }
+    for u in &r.undetermined {
+        let combo: Vec<String> = u
+            .combination
+            .iter()
+            .map(|(n, w)| format!("{w:+.3}·{n}"))
+            .collect();
+        let _ = writeln!(s, "undetermined: {}\n  {}", combo.join(" "), u.note);
+    }
+    let flagged: Vec<String> = r
+        .pairs
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.occluded || p.unreachable)
+        .map(|(i, p)| {
+            format!(
+                "pair {i}{}{}",
+                if p.occluded { " occluded" } else { "" },
+                if p.unreachable { " unreachable" } else { "" }
+            )
+        })
+        .collect();
+    if !flagged.is_empty() {
+        let _ = writeln!(s, "flags: {}", flagged.join(", "));
+    }
+    s
+}

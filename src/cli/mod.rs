@@ -1,0 +1,154 @@
+//! The `mirage` command line: the [`Cli`] parser and one module per command.
+//!
+//! Every flag is defined once, on the options struct its command takes
+//! (`#[derive(clap::Args)]`, the field's doc comment is its help), and its value
+//! is checked by its clap value parser; a check that needs several flags is done
+//! by the command and reported as [`Error::Usage`]. A value a parser refuses is
+//! reported like a usage error, one line naming the flag ([`parse_error`]).
+
+pub mod compare;
+pub mod fit;
+#[cfg(feature = "preview")]
+pub mod preview;
+pub mod rays;
+pub mod render;
+pub mod sky;
+pub mod trace;
+pub mod tradeoff;
+
+use crate::error::{Error, Result};
+use clap::error::{ContextKind, ContextValue, ErrorKind};
+use std::process::ExitCode;
+
+/// The whole command line.
+#[derive(Debug, clap::Parser)]
+#[command(
+    name = "mirage",
+    version,
+    about = "Inverse design of atmospheric mirages"
+)]
+pub struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_parser = thread_count)]
+    pub threads: Option<usize>,
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, clap::Subcommand)]
+pub enum Command {
+    /// Trace every point pair through the problem's medium and report endpoints.
+    Trace(trace::TracePairsOptions),
+    /// Fit the free parameters so that every pair's ray lands on its target.
+    Fit(fit::FitOptions),
+    /// Measure the speed/accuracy trade of the integrators on a problem.
+    Tradeoff(tradeoff::TradeoffOptions),
+    /// Draw the ray diagram of a problem's pairs through its medium.
+    Rays(rays::RaysOptions),
+    /// Render a scene seen through its air along curved rays.
+    Render(render::CommandOptions),
+    /// Compare an image with a reference: RMSE, PSNR, SSIM, share of pixels over a threshold.
+    Compare(compare::CompareOptions),
+    /// Write a scene's sky as a lat-long environment map (Mitsuba's envmap convention).
+    Sky(sky::SkyOptions),
+    /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
+    #[cfg(feature = "preview")]
+    Preview(preview::PreviewOptions),
+}
+
+/// `--threads`: at least 1.
+fn thread_count(s: &str) -> std::result::Result<usize, String> {
+    match s
+        .parse::<usize>()
+        .map_err(|_| format!("not a whole number: `{s}`"))?
+    {
+        0 => Err("must be at least 1".into()),
+        n => Ok(n),
+    }
+}
+
+impl Cli {
+    /// Sizes rayon's global pool to `--threads`, if given (else all cores).
+    pub fn set_threads(&self) {
+        if let Some(n) = self.threads {
+            // Only fails if a pool already exists, which cannot happen before
+            // the command runs.
+            let _ = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build_global();
+        }
+    }
+
+    /// Runs the command.
+    pub fn run(&self) -> Result<()> {
+        match &self.command {
+            Command::Trace(o) => trace::run(o).map(|_| ()),
+            Command::Fit(o) => fit::run(o).map(|_| ()),
+            Command::Tradeoff(o) => tradeoff::run(o).map(|_| ()),
+            Command::Rays(o) => rays::run(o),
+            Command::Render(o) => render::run(o),
+            Command::Compare(o) => compare::run(o),
+            Command::Sky(o) => sky::run(o),
+            #[cfg(feature = "preview")]
+            Command::Preview(o) => preview::run(o),
+        }
+    }
+}
+
+/// A flag's value refused by its parser (out of range, not a number, not one
+/// of the choices) as a usage error naming the flag; `None` for every other
+/// parse failure (help, version, a missing or unknown argument), which clap
+/// prints itself.
+pub fn parse_error(e: &clap::Error) -> Option<Error> {
+    let flag = match e.get(ContextKind::InvalidArg) {
+        // "--spp <SPP>": the flag as typed, without its value name.
+        Some(ContextValue::String(arg)) => arg.split(' ').next().unwrap_or(arg).to_string(),
+        _ => return None,
+    };
+    match e.kind() {
+        ErrorKind::ValueValidation => {
+            let message = std::error::Error::source(e)?.to_string();
+            Some(Error::usage(flag, message))
+        }
+        ErrorKind::InvalidValue => {
+            let value = match e.get(ContextKind::InvalidValue) {
+                Some(ContextValue::String(v)) => v.clone(),
+                _ => return None,
+            };
+            let expected = match e.get(ContextKind::ValidValue) {
+                Some(ContextValue::Strings(names)) => {
+                    names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>()
+                }
+                _ => return None,
+            };
+            let expected = match expected.split_last() {
+                Some((last, [])) => last.clone(),
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => return None,
+            };
+            Some(Error::usage(
+                flag,
+                format!("unknown value `{value}` (expected {expected})"),
+            ))
+        }
+        _ => None,
+    }
+}
+
+/// Prints a parse failure and gives its exit code: a refused value as one line
+/// `error: --flag: message` (exit code 2), anything else as clap words it (exit
+/// code 0 for `--help` and `--version`, 2 otherwise).
+pub fn report_parse_error(e: &clap::Error) -> ExitCode {
+    match parse_error(e) {
+        Some(usage) => {
+            eprintln!("error: {usage}");
+            ExitCode::from(usage.exit_code() as u8)
+        }
+        None => {
+            let _ = e.print();
+            ExitCode::from(e.exit_code().clamp(0, 255) as u8)
+        }
+    }
+}

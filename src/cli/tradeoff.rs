@@ -1,0 +1,55 @@
+//! `mirage tradeoff`: the speed/accuracy trade of the integrators on a problem.
+
+use crate::error::Result;
+use crate::io::{check_not_input, write_json};
+use crate::problem::Problem;
+use crate::tradeoff::Tradeoff;
+use std::path::PathBuf;
+
+/// Measure the speed/accuracy trade of the integrators on a problem.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+pub struct TradeoffOptions {
+    /// Problem file (JSON).
+    pub problem: PathBuf,
+    /// Write the measurements as JSON here.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Write the measurements as CSV here.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Pareto plot, error against time (.png or .svg).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Measure traces only, no fits.
+    #[arg(long)]
+    pub no_fit: bool,
+}
+
+/// Measures endpoint error, trace cost and fit quality for a range of RK4
+/// steps and Dormand–Prince tolerances; prints a table and writes JSON, CSV and
+/// a Pareto plot where asked. All outputs are checked before measuring.
+pub fn run(o: &TradeoffOptions) -> Result<Tradeoff> {
+    let problem = Problem::load(&o.problem)?;
+    for out in [&o.output, &o.csv, &o.plot].into_iter().flatten() {
+        check_not_input(out, &[o.problem.as_path()])?;
+    }
+    if let Some(p) = &o.plot {
+        crate::plot::ImageFormat::from_path(p)?;
+    }
+    let fit = !o.no_fit;
+    if fit {
+        crate::tradeoff::check_fit(&problem)?;
+    }
+    let t = crate::tradeoff::measure(&problem, fit)?;
+    if let Some(out) = &o.output {
+        write_json(out, &t)?;
+    }
+    if let Some(c) = &o.csv {
+        crate::io::write_atomic(c, t.to_csv().as_bytes())?;
+    }
+    if let Some(p) = &o.plot {
+        crate::plot::draw_tradeoff(&t, p)?;
+    }
+    print!("{}", t.to_table());
+    Ok(t)
+}
