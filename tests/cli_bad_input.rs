@@ -1,4 +1,4 @@
-//! Every kind of bad input in `problem-format.md` gets one clear message naming
+//! Every kind of bad input in `docs/problem-format.md` gets one clear message naming
 //! the file and the field, exit code 2, no panic, and no output file.
 
 use std::path::Path;

@@ -4,7 +4,7 @@
     python scipy_fit.py PROBLEM.json [--rtol R] [--method RK45|DOP853] [--max-time S]
     python scipy_fit.py PROBLEM.json --trace-only     # F of the file's medium, no fit
 
-It implements the contract of ``shared/spec/model.md`` independently of mirage:
+It implements the contract of ``docs/model.md`` independently of mirage:
 
 * the logistic medium (background, inversion, areal hot spots), with δ and its
   analytic gradient and an overflow-safe logistic function;
@@ -39,8 +39,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-C = 0.003  # model.md: δ = C·|k_s|·D/S
-DEFAULT_EDGE = 10.0  # model.md: hot spot rim sharpness, 1/m
+C = 0.003  # docs/model.md: δ = C·|k_s|·D/S
+DEFAULT_EDGE = 10.0  # docs/model.md: hot spot rim sharpness, 1/m
 REF_RTOL = 1e-13  # tolerance of the reference tracer used for objective_ref
 REF_METHOD = "DOP853"  # high order: the reference F costs a few rays, not a fit
 
@@ -53,7 +53,7 @@ REF_METHOD = "DOP853"  # high order: the reference F costs a few rays, not a fit
 def sigmoid(t):
     """Logistic σ(t) and its derivative σ'(t) = σ(1 − σ), from e^(−|t|).
 
-    Written with e^(−|t|) so that no finite t overflows (model.md), and σ' as
+    Written with e^(−|t|) so that no finite t overflows (docs/model.md), and σ' as
     e/(1+e)² rather than σ(1−σ), which would cancel to 0 for large t.
     """
     e = np.exp(-np.abs(t))
@@ -63,7 +63,7 @@ def sigmoid(t):
 
 
 class Medium:
-    """The logistic refractive model of model.md, built from a problem's medium dict.
+    """The logistic refractive model of docs/model.md, built from a problem's medium dict.
 
     Terms that the dict does not have are not modelled (absent from D and from S).
     """
@@ -157,7 +157,7 @@ def trace(medium, pair, rtol, atol, method):
     Returns (endpoint, unreachable, number of RHS evaluations). The endpoint is where
     the ray first crosses the plane, found by solve_ivp's event location on the
     step's dense output. A ray that does not reach the plane within max_length
-    ends at its traced point nearest the plane (model.md), so F stays finite.
+    ends at its traced point nearest the plane (docs/model.md), so F stays finite.
     """
     delta0, _ = medium.delta_grad(pair.origin)
     y0 = np.concatenate((pair.origin, (1.0 + delta0) * pair.direction))

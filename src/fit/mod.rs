@@ -21,7 +21,7 @@ use report::{FitReport, ParamReport, RunReport, SolverReport};
 use solve::IterateHook;
 use std::time::Instant;
 
-/// Fits `problem`'s free parameters and reports everything `problem-format.md`
+/// Fits `problem`'s free parameters and reports everything `docs/problem-format.md`
 /// asks of a result. `hook` sees every iterate (progress display, tests).
 pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
     let started = Instant::now();

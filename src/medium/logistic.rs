@@ -1,4 +1,4 @@
-//! The logistic refractive model of `model.md`.
+//! The logistic refractive model of `docs/model.md`.
 //!
 //! ```text
 //! δ(p) = C · |k_s| · D(p) / S
@@ -276,7 +276,7 @@ impl LogisticMedium<f64> {
         self.background.is_some() || self.inversion.is_some() || !self.hotspots.is_empty()
     }
 
-    /// Checks every rule of `model.md`; the first violation is returned with the
+    /// Checks every rule of `docs/model.md`; the first violation is returned with the
     /// path of the field it concerns.
     pub fn validate(&self) -> Result<(), MediumError> {
         let bad = |p: Param, message: String| {

@@ -1,4 +1,4 @@
-//! The refractive index of the air, as δ = n − 1 (see `model.md`).
+//! The refractive index of the air, as δ = n − 1 (see `docs/model.md`).
 //!
 //! - [`IndexField`] is the one thing the tracer needs from a medium: δ and ∇δ at
 //!   a point. The logistic model implements it, and so do the analytic media in

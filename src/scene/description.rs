@@ -1,4 +1,5 @@
 //! Scene files: what the renderer looks at, from where, through which air.
+//! The format, every field with its default and its checks: `docs/scene-format.md`.
 //!
 //! ```json
 //! {
@@ -289,7 +290,7 @@ pub struct Scene {
     pub description: String,
     /// The camera.
     pub camera: CameraSettings,
-    /// The air (valid per `model.md`).
+    /// The air (valid per `docs/model.md`).
     pub medium: LogisticMedium,
     /// The ground, if any.
     pub ground: Option<GroundAlbedo>,

@@ -1,5 +1,5 @@
 //! The stratified fast path: with no hot spots δ depends on the height alone,
-//! so a ray stays in the vertical plane of its launch direction (`model.md`)
+//! so a ray stays in the vertical plane of its launch direction (`docs/model.md`)
 //! and is a 2-D curve in it.
 //!
 //! In the τ form the horizontal part of `dv/dτ = n∇δ` is exactly 0, so v_x and
