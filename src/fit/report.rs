@@ -72,7 +72,7 @@ pub struct SolverReport {
     pub target_objective: f64,
 }
 
-/// The result of `mirage fit` (`problem-format.md`, "The result of a fit").
+/// The result of `mirage fit` (`docs/problem-format.md`, "The result of a fit").
 #[derive(Clone, Debug, Serialize)]
 pub struct FitReport {
     /// Problem name.

@@ -1,4 +1,4 @@
-//! Problem files (`problem-format.md`): load, validate, and turn into a
+//! Problem files (`docs/problem-format.md`): load, validate, and turn into a
 //! [`Problem`] the rest of mirage can trust.
 //!
 //! ```json
@@ -76,7 +76,7 @@ pub struct Problem {
     pub name: String,
     /// What a user would see.
     pub description: String,
-    /// Starting medium (valid per `model.md`).
+    /// Starting medium (valid per `docs/model.md`).
     pub medium: LogisticMedium,
     /// Free parameters, in the order of the file.
     pub free: Vec<Param>,
