@@ -26,7 +26,7 @@ use super::camera::{CameraState, MAX_FOV, MIN_FOV};
 use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
 use super::gpu::{Gpu, Tracer, copy_to_buffer};
-use super::scene_buffers::{SceneBuffers, View, pack};
+use super::pack::{SceneBuffers, View, pack};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use crate::medium::{LogisticMedium, Param};
@@ -254,7 +254,7 @@ impl App {
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
         let buffers = pack(&self.input.scene, &self.medium, &view)
-            .map_err(|e| Error::input(&self.input.path, e.field, e.message))?;
+            .map_err(|e| e.in_file(&self.input.path))?;
         let tracer = Tracer::new(&gpu, &buffers);
         let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
         let egui_state = egui_winit::State::new(
