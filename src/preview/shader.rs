@@ -145,7 +145,7 @@ mod tests {
     /// `(member name, offset)` of the named fields of a Rust struct.
     macro_rules! fields {
         ($t:ty { $($f:ident),* $(,)? }) => {
-            vec![$((stringify!($f), offset_of!($t, $f))),*]
+            [$((stringify!($f), offset_of!($t, $f))),*]
         };
     }
 
@@ -237,7 +237,7 @@ mod tests {
         );
         // The shader spells the three rows of the affine map out.
         let rows = offset_of!(Node, rows);
-        let mut node = fields!(Node { kind });
+        let mut node = fields!(Node { kind }).to_vec();
         node.extend([("row0", rows), ("row1", rows + 16), ("row2", rows + 32)]);
         node.extend(fields!(Node { p0, p1 }));
         check_struct(&module, "Node", size_of::<Node>(), &node);
