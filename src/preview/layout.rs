@@ -7,7 +7,7 @@
 //! without padding; [`super::shader`]'s tests check them against the layouts
 //! naga computes for the shader.
 //!
-//! Everything is f32: the medium stays in δ form (see [`super::pack`]).
+//! Everything is f32: the medium stays in δ form (see [`super::pack`](mod@super::pack)).
 
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
