@@ -7,8 +7,8 @@
 #![cfg(feature = "preview")]
 
 use mirage::preview::gpu::Gpu;
+use mirage::preview::pack::View;
 use mirage::preview::render_frame;
-use mirage::preview::scene_buffers::View;
 use mirage::render::output::ToneMap;
 use mirage::render::{RenderOptions, Renderer, Shading};
 use mirage::scene::Scene;

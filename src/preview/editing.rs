@@ -197,7 +197,7 @@ pub fn save(input: &Path, medium: &LogisticMedium, out: &Path) -> Result<()> {
 }
 
 /// A fit's progress as the window shows it.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct FitProgress {
     /// Iterates seen so far (all runs).
     pub iterations: u64,
@@ -205,8 +205,9 @@ pub struct FitProgress {
     pub best_objective: f64,
     /// The run now iterating.
     pub run: String,
-    /// The result, once done: the fitted medium, or the error.
-    pub done: Option<std::result::Result<LogisticMedium, String>>,
+    /// The result, once done: the fitted medium, or the error (shared: the
+    /// progress is copied out to whoever asks).
+    pub done: Option<std::result::Result<LogisticMedium, Arc<Error>>>,
 }
 
 /// A fit running on a background thread from the editor's current medium.
@@ -239,7 +240,7 @@ impl FitJob {
                 });
             let result = crate::fit::fit(&problem, Some(hook))
                 .map(|report| report.medium)
-                .map_err(|e| e.to_string());
+                .map_err(Arc::new);
             if let Ok(mut p) = done.lock() {
                 p.done = Some(result);
             }

@@ -4,14 +4,10 @@
 //! Without a GPU, Mesa's software Vulkan (lavapipe, Debian
 //! `mesa-vulkan-drivers libvulkan1`) serves: wgpu picks it as a `Cpu` adapter.
 
-use super::scene_buffers::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers};
+use super::pack::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers};
+use super::shader::{WORKGROUP, trace_shader};
 use crate::error::{Error, Result};
 use wgpu::util::DeviceExt;
-
-/// The tracing shader (WGSL).
-pub const TRACE_SHADER: &str = include_str!("trace.wgsl");
-/// Compute workgroup side (the shader's `@workgroup_size(8, 8)`).
-const WORKGROUP: u32 = 8;
 
 /// A device and its queue.
 pub struct Gpu {
@@ -175,7 +171,7 @@ impl Tracer {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(TRACE_SHADER.into()),
+            source: wgpu::ShaderSource::Wgsl(trace_shader().into()),
         });
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
@@ -504,28 +500,5 @@ impl Tracer {
             }
         }
         Ok(out)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use wgpu::naga;
-
-    /// Parses and validates a WGSL source as wgpu will (no GPU needed).
-    fn validate(name: &str, source: &str) {
-        let module = naga::front::wgsl::parse_str(source)
-            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
-    }
-
-    #[test]
-    fn the_shaders_are_valid_wgsl() {
-        validate("trace.wgsl", super::TRACE_SHADER);
-        validate("display.wgsl", crate::preview::display::DISPLAY_SHADER);
     }
 }

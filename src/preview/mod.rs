@@ -2,8 +2,9 @@
 //! shading in a WGSL compute shader, shown live in a window with controls to
 //! edit the air, or rendered headless to a PNG.
 //!
-//! Data flow: a scene or problem file ([`Input`]) → [`scene_buffers::pack`]
-//! (f32 buffers, the medium in δ form) → [`gpu::Tracer`] (one compute
+//! Data flow: a scene or problem file ([`Input`]) → [`pack::pack`] (f32
+//! buffers laid out as in [`layout`], the objects compiled by [`program`], the
+//! medium in δ form) → [`gpu::Tracer`] (one compute
 //! dispatch per frame into a linear HDR image) → either read back and written
 //! like `mirage render`'s PNG (headless), or tone-mapped on the GPU and drawn
 //! under the egui panels ([`window`]).
@@ -17,7 +18,10 @@ pub mod camera;
 pub mod display;
 pub mod editing;
 pub mod gpu;
-pub mod scene_buffers;
+pub mod layout;
+pub mod pack;
+pub mod program;
+pub mod shader;
 pub mod window;
 
 use crate::error::{Error, Result};
@@ -31,7 +35,7 @@ use crate::render::{RenderOptions, Shading};
 use crate::scene::Scene;
 use crate::scene::description::{CameraSpec, SceneFile};
 use gpu::{Gpu, Tracer};
-use scene_buffers::{View, pack};
+use pack::{View, pack};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -140,8 +144,7 @@ pub fn render_frame(
     medium: &LogisticMedium,
     view: &View,
 ) -> Result<Vec<[f32; 3]>> {
-    let buffers =
-        pack(scene, medium, view).map_err(|e| Error::input(&scene.source, e.field, e.message))?;
+    let buffers = pack(scene, medium, view).map_err(|e| e.in_file(&scene.source))?;
     let tracer = Tracer::new(gpu, &buffers);
     let mut pixels = tracer.render_to_cpu(gpu)?;
     apply_glare(scene, view, &mut pixels);
@@ -307,8 +310,7 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
             _ => frame_size(scene, width, height),
         };
         let view = View::of_scene(scene, &options, w, h);
-        let buffers = pack(scene, &scene.medium, &view)
-            .map_err(|e| Error::input(&o.input, e.field, e.message))?;
+        let buffers = pack(scene, &scene.medium, &view).map_err(|e| e.in_file(&o.input))?;
         let tracer = Tracer::new(&gpu, &buffers);
         tracer.render(&gpu);
         let frames = 3;

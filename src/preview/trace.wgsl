@@ -4,6 +4,10 @@
 // The medium is evaluated in δ form (δ ≈ 1e-5 keeps 7 digits; 1 + δ would keep
 // three): dv/dτ = ∇δ + δ∇δ, and Snell's invariant is carried as c − 1, computed
 // from δ and the elevation, never as |v_h| − 1.
+//
+// The constants shared with the Rust side (OP_*, STACK_DEPTH, WORKGROUP,
+// SHADING_*, GROUND_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
+// that src/preview/shader.rs generates and puts before this file.
 
 struct Params {
     origin: vec4<f32>,
@@ -51,7 +55,6 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 @group(0) @binding(9) var<storage, read> stars: array<vec4<f32>>;
 
 const PI: f32 = 3.14159265358979;
-const BIG: f32 = 1e30;
 const MAX_ITERATIONS: u32 = 20000u;
 
 // ---------------------------------------------------------------- the medium
@@ -175,7 +178,7 @@ fn fate(p: vec3<f32>, v: vec3<f32>, objects: bool) -> Fate {
     if (rising) {
         if (!escape) { return f; }
         low = p.y;
-    } else if (P.flags.z != 0u && profile[profile_index_ceil(p.y)].y - P.profile.y > c1) {
+    } else if (P.flags.z != GROUND_NONE && profile[profile_index_ceil(p.y)].y - P.profile.y > c1) {
         high = p.y;
         ground_bound = true;
     } else if (profile[profile_index_floor(p.y)].y < c1 && escape) {
@@ -214,29 +217,29 @@ fn box_distance(d: vec3<f32>, h: vec3<f32>, shrink: f32) -> f32 {
 }
 
 fn run_program(start: u32, count: u32, p: vec3<f32>) -> f32 {
-    var stack: array<f32, 16>;
+    var stack: array<f32, STACK_DEPTH>;
     var top = 0u;
     for (var i = start; i < start + count; i++) {
         let n = nodes[i];
         let kind = n.kind.x;
-        if (kind < 10u) {
+        if (kind < OP_FIRST_BINARY) {
             let q = vec3<f32>(dot(n.row0.xyz, p) + n.row0.w, dot(n.row1.xyz, p) + n.row1.w, dot(n.row2.xyz, p) + n.row2.w);
             var d = 0.0;
             switch kind {
-                case 1u: { d = length(q - n.p0.xyz) - n.p0.w; }
-                case 2u: { d = box_distance(q - n.p0.xyz, n.p1.xyz, 0.0); }
-                case 3u: { d = box_distance(q - n.p0.xyz, n.p1.xyz, n.p0.w); }
-                case 4u: { d = dot(n.p0.xyz, q) - n.p0.w; }
-                case 5u: {
+                case OP_SPHERE: { d = length(q - n.p0.xyz) - n.p0.w; }
+                case OP_BOX: { d = box_distance(q - n.p0.xyz, n.p1.xyz, 0.0); }
+                case OP_ROUNDED_BOX: { d = box_distance(q - n.p0.xyz, n.p1.xyz, n.p0.w); }
+                case OP_PLANE: { d = dot(n.p0.xyz, q) - n.p0.w; }
+                case OP_TORUS: {
                     let e = q - n.p0.xyz;
                     d = length(vec2<f32>(length(e.xz) - n.p1.x, e.y)) - n.p1.y;
                 }
-                case 6u: {
+                case OP_CYLINDER: {
                     let e = q - n.p0.xyz;
                     let w = vec2<f32>(length(e.xz) - n.p1.x, abs(e.y) - n.p1.y);
                     d = min(max(w.x, w.y), 0.0) + length(max(w, vec2<f32>(0.0)));
                 }
-                case 7u: {
+                case OP_CAPSULE: {
                     let pa = q - n.p0.xyz;
                     let ba = n.p1.xyz - n.p0.xyz;
                     let bb = dot(ba, ba);
@@ -254,10 +257,11 @@ fn run_program(start: u32, count: u32, p: vec3<f32>) -> f32 {
             top -= 1u;
             var r = 0.0;
             switch kind {
-                case 10u: { r = min(a, b); }
-                case 11u: { r = max(a, b); }
-                case 12u: { r = max(a, -b); }
+                case OP_MIN: { r = min(a, b); }
+                case OP_MAX: { r = max(a, b); }
+                case OP_DIFF: { r = max(a, -b); }
                 default: {
+                    // OP_SMIN
                     let k = n.p0.x;
                     let hh = max(k - abs(a - b), 0.0) / k;
                     r = min(a, b) - hh * hh * k * 0.25;
@@ -457,7 +461,6 @@ fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
 
 // The star along unit `d` (PhysicalSky::star): a cube map of STAR_CELLS cells
 // per face edge, each with at most one star, drawn as a disc of P.stars.x.
-const STAR_CELLS: f32 = 90.0;
 
 fn star_light(d: vec3<f32>) -> vec3<f32> {
     let a = abs(d);
@@ -480,7 +483,7 @@ fn star_light(d: vec3<f32>) -> vec3<f32> {
     if (s.w == 0.0) { return vec3<f32>(0.0); }
     let cell = 2.0 / STAR_CELLS;
     let r = P.stars.x;
-    let margin = min(r / cell, 0.45);
+    let margin = min(r / cell, STAR_MARGIN_MAX);
     let du = (fu - (iu + margin + s.x * (1.0 - 2.0 * margin))) * cell;
     let dv = (fv - (iv + margin + s.y * (1.0 - 2.0 * margin))) * cell;
     if (du * du + dv * dv > r * r) { return vec3<f32>(0.0); }
@@ -548,7 +551,7 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
             theta = 0.0;
             arc_per_theta = h_arc;
             ground_theta = -1.0;
-            if (P.flags.z != 0u) { ground_theta = ground_crossing(seg); }
+            if (P.flags.z != GROUND_NONE) { ground_theta = ground_crossing(seg); }
         }
         let room = (1.0 - theta) * arc_per_theta;
         var go = room;
@@ -627,7 +630,7 @@ fn object_normal(i: u32, p: vec3<f32>) -> vec3<f32> {
 }
 
 fn ground_albedo(x: f32, z: f32) -> vec3<f32> {
-    if (P.flags.z == 2u) {
+    if (P.flags.z == GROUND_CHECKER) {
         let i = i32(floor(x / P.ground0.w)) + i32(floor(z / P.ground0.w));
         if ((i & 1) != 0) { return P.ground1.xyz; }
     }
@@ -635,7 +638,7 @@ fn ground_albedo(x: f32, z: f32) -> vec3<f32> {
 }
 
 fn shade(o: Outcome) -> vec3<f32> {
-    let albedo_only = P.flags.x == 1u;
+    let albedo_only = P.flags.x == SHADING_ALBEDO;
     if (o.kind == 0u) { return sky_radiance(o.dir); }
     if (o.kind == 1u) {
         let albedo = objects[o.index].albedo.xyz;
@@ -656,7 +659,7 @@ fn sample_offset(i: u32) -> vec2<f32> {
     return vec2<f32>(fract(0.5 + 0.7548776662466927 * k), fract(0.5 + 0.5698402909980533 * k));
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = P.size.x;
     let hgt = P.size.y;

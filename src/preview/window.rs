@@ -26,8 +26,8 @@ use super::camera::{CameraState, MAX_FOV, MIN_FOV};
 use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
 use super::gpu::{Gpu, Tracer, copy_to_buffer};
-use super::scene_buffers::{SceneBuffers, View, pack};
-use crate::error::{Error, Result};
+use super::pack::{SceneBuffers, View, pack};
+use crate::error::{Error, FieldError, Result};
 use crate::io::write_atomic;
 use crate::medium::{LogisticMedium, Param};
 use crate::render::Shading;
@@ -96,7 +96,8 @@ struct App {
     input: Input,
     size: (u32, u32),
     medium: LogisticMedium,
-    medium_error: Option<String>,
+    /// Why the edited medium was not applied.
+    medium_error: Option<FieldError>,
     medium_dirty: bool,
     sliders: Vec<Slider>,
     camera: CameraState,
@@ -254,7 +255,7 @@ impl App {
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
         let buffers = pack(&self.input.scene, &self.medium, &view)
-            .map_err(|e| Error::input(&self.input.path, e.field, e.message))?;
+            .map_err(|e| e.in_file(&self.input.path))?;
         let tracer = Tracer::new(&gpu, &buffers);
         let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
         let egui_state = egui_winit::State::new(
@@ -365,7 +366,7 @@ impl App {
             }
         }
         if let Some(e) = &self.medium_error {
-            ui.colored_label(egui::Color32::LIGHT_RED, e);
+            ui.colored_label(egui::Color32::LIGHT_RED, format!("{e} (not applied)"));
         }
         ui.checkbox(
             &mut self.edit_hot_spots,
@@ -560,7 +561,7 @@ impl App {
     fn apply_medium(&mut self) {
         self.medium_dirty = false;
         if let Err(e) = self.medium.validate() {
-            self.medium_error = Some(format!("medium.{}: {} (not applied)", e.field, e.message));
+            self.medium_error = Some(FieldError::new(format!("medium.{}", e.field), e.message));
             return;
         }
         self.medium_error = None;
@@ -639,12 +640,61 @@ impl App {
         Ok(false)
     }
 
+    /// Draws one frame: the controls, the edits they made, the traced view
+    /// (or its glare, once still) and the panels over it; saves the
+    /// screenshot on the last frame.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let start = Instant::now();
         self.poll_fit();
         let Some(mut g) = self.graphics.take() else {
             return Ok(());
         };
+        let (mut output, view_rect) = self.run_ui(&mut g);
+        let medium_changed = self.medium_dirty;
+        if self.medium_dirty {
+            g = self.apply_medium_with(g);
+        }
+        let ppp = output.pixels_per_point;
+        let place = Placement::of(view_rect, ppp, &g.config, self.render_scale);
+        let view = self.view(place.trace_width, place.trace_height);
+        let trace = self.upload_view(&mut g, &view, medium_changed)?;
+        // egui's texture changes are applied now, whether or not this frame
+        // is presented (an unapplied delta is a bug egui checks for).
+        let mut textures = std::mem::take(&mut output.textures_delta);
+        g.update_egui_textures(&textures);
+        let Some(frame) = self.acquire_frame(&g) else {
+            g.free_egui_textures(&mut textures);
+            self.graphics = Some(g);
+            return Ok(());
+        };
+        let plan = FramePlan {
+            trace,
+            place,
+            display_group: self.display_bind_group(&g, &place),
+            paint: self.egui.tessellate(output.shapes, ppp),
+            screen: egui_wgpu::ScreenDescriptor {
+                size_in_pixels: [g.config.width, g.config.height],
+                pixels_per_point: ppp,
+            },
+            shot: self.screenshot_texture(&g),
+        };
+        let shot = g.encode_and_submit(&frame, &plan);
+        g.gpu.queue.present(frame);
+        g.free_egui_textures(&mut textures);
+        if let (Some((buffer, row)), Some(path)) = (shot, &self.screenshot) {
+            let (fw, fh) = (g.config.width, g.config.height);
+            let png = read_png(&g.gpu, &buffer, row, fw, fh, g.config.format)?;
+            write_atomic(path, &png)?;
+        }
+        self.count_frame(event_loop, start);
+        self.graphics = Some(g);
+        Ok(())
+    }
+
+    /// Runs the controls and the view's interaction for this frame and hands
+    /// egui's platform output (cursor, clipboard) to the window; returns
+    /// egui's output and the central area's rectangle (points).
+    fn run_ui(&mut self, g: &mut Graphics) -> (egui::FullOutput, egui::Rect) {
         let raw = g.egui_state.take_egui_input(&g.window);
         let ctx = self.egui.clone();
         let mut view_rect = egui::Rect::NOTHING;
@@ -653,63 +703,52 @@ impl App {
             self.interact(ui, rect, &response);
             view_rect = rect;
         });
-        g.egui_state
-            .handle_platform_output(&g.window, output.platform_output);
-        let medium_changed = self.medium_dirty;
-        if self.medium_dirty {
-            self.graphics = Some(g);
-            self.apply_medium();
-            g = self.graphics.take().expect("just put back");
-        }
-        let ppp = output.pixels_per_point;
-        let (fw, fh) = (g.config.width, g.config.height);
-        let rx = ((view_rect.min.x * ppp).max(0.0) as u32).min(fw - 1);
-        let ry = ((view_rect.min.y * ppp).max(0.0) as u32).min(fh - 1);
-        let rw = ((view_rect.width() * ppp) as u32).clamp(1, fw - rx);
-        let rh = ((view_rect.height() * ppp) as u32).clamp(1, fh - ry);
-        let (tw, th) = (
-            (rw / self.render_scale).max(1),
-            (rh / self.render_scale).max(1),
-        );
-        let view = self.view(tw, th);
-        g.buffers.set_view(&view);
-        g.tracer.update(&g.gpu, &g.buffers);
-        let trace = self.glare_or_trace(&g, &view, medium_changed)?;
+        let platform = std::mem::take(&mut output.platform_output);
+        g.egui_state.handle_platform_output(&g.window, platform);
+        (output, view_rect)
+    }
 
-        // egui's texture changes are applied now, whether or not this frame
-        // is presented (an unapplied delta is a bug egui checks for).
-        let mut textures = std::mem::take(&mut output.textures_delta);
-        for (id, deltas) in &textures.set {
-            for delta in deltas {
-                g.egui_renderer
-                    .update_texture(&g.gpu.device, &g.gpu.queue, *id, delta);
-            }
-        }
-        let frame = match g.surface.get_current_texture() {
+    /// [`Self::apply_medium`] while the frame holds the graphics: they are
+    /// lent back to `self` for it.
+    fn apply_medium_with(&mut self, g: Graphics) -> Graphics {
+        self.graphics = Some(g);
+        self.apply_medium();
+        self.graphics.take().expect("just put back")
+    }
+
+    /// Uploads the frame's view (camera, shading, size) and decides whether
+    /// this frame traces ([`Self::glare_or_trace`]).
+    fn upload_view(&mut self, g: &mut Graphics, view: &View, medium_changed: bool) -> Result<bool> {
+        g.buffers.set_view(view);
+        g.tracer.update(&g.gpu, &g.buffers);
+        self.glare_or_trace(g, view, medium_changed)
+    }
+
+    /// The surface's next texture; `None` when it is lost or outdated: the
+    /// surface is then reconfigured for the next frame, which traces (this
+    /// one's trace is never dispatched).
+    fn acquire_frame(&mut self, g: &Graphics) -> Option<wgpu::SurfaceTexture> {
+        match g.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            other => {
-                // Lost or outdated: reconfigure and try next frame, which
-                // traces (this one's trace was never dispatched).
-                let _ = other;
+            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => Some(f),
+            _ => {
                 self.traced.clear();
                 g.surface.configure(&g.gpu.device, &g.config);
-                for id in &textures.free {
-                    g.egui_renderer.free_texture(id);
-                }
-                textures.clear();
-                self.graphics = Some(g);
-                return Ok(());
+                None
             }
-        };
-        let target = frame.texture.create_view(&Default::default());
+        }
+    }
+
+    /// Writes the display pass's uniform (where the image goes, its size,
+    /// the tone mapping) and binds it with the linear image.
+    fn display_bind_group(&self, g: &Graphics, place: &Placement) -> wgpu::BindGroup {
         let uniform: [f32; 8] = [
-            rx as f32,
-            ry as f32,
-            rw as f32,
-            rh as f32,
-            tw as f32,
-            th as f32,
+            place.x as f32,
+            place.y as f32,
+            place.width as f32,
+            place.height as f32,
+            place.trace_width as f32,
+            place.trace_height as f32,
             if self.shading == Shading::Albedo {
                 1.0
             } else {
@@ -721,7 +760,7 @@ impl App {
             .queue
             .write_buffer(&g.display_uniform, 0, bytemuck::cast_slice(&uniform));
         let linear_view = g.tracer.output().create_view(&Default::default());
-        let display_group = g.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        g.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("display"),
             layout: &g.display_layout,
             entries: &[
@@ -734,19 +773,19 @@ impl App {
                     resource: wgpu::BindingResource::TextureView(&linear_view),
                 },
             ],
-        });
-        let paint = ctx.tessellate(output.shapes, ppp);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [fw, fh],
-            pixels_per_point: ppp,
-        };
+        })
+    }
+
+    /// On the last frame with a screenshot asked for, a texture the frame is
+    /// drawn into a second time, to be read back.
+    fn screenshot_texture(&self, g: &Graphics) -> Option<wgpu::Texture> {
         let last = self.frames_left == Some(1);
-        let shot_texture = (last && self.screenshot.is_some()).then(|| {
+        (last && self.screenshot.is_some()).then(|| {
             g.gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("screenshot"),
                 size: wgpu::Extent3d {
-                    width: fw,
-                    height: fh,
+                    width: g.config.width,
+                    height: g.config.height,
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
@@ -756,22 +795,124 @@ impl App {
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             })
-        });
-        let mut encoder = g
+        })
+    }
+
+    /// Counts the frame and its time; closes the window after the last one.
+    fn count_frame(&mut self, event_loop: &ActiveEventLoop, start: Instant) {
+        self.frame_count += 1;
+        self.frame_ms = start.elapsed().as_secs_f64() * 1000.0;
+        if let Some(n) = &mut self.frames_left {
+            *n = n.saturating_sub(1);
+            if *n == 0 {
+                event_loop.exit();
+            }
+        }
+    }
+}
+
+/// Where the traced image goes in the window (framebuffer pixels) and the
+/// size it is traced at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Placement {
+    x: u32,
+    y: u32,
+    width: u32,
+    height: u32,
+    trace_width: u32,
+    trace_height: u32,
+}
+
+impl Placement {
+    /// The central area `rect` (points, `ppp` pixels each) clamped to the
+    /// surface, traced at 1/`render_scale` of its resolution.
+    fn of(
+        rect: egui::Rect,
+        ppp: f32,
+        config: &wgpu::SurfaceConfiguration,
+        render_scale: u32,
+    ) -> Placement {
+        let (fw, fh) = (config.width, config.height);
+        let x = ((rect.min.x * ppp).max(0.0) as u32).min(fw - 1);
+        let y = ((rect.min.y * ppp).max(0.0) as u32).min(fh - 1);
+        let width = ((rect.width() * ppp) as u32).clamp(1, fw - x);
+        let height = ((rect.height() * ppp) as u32).clamp(1, fh - y);
+        Placement {
+            x,
+            y,
+            width,
+            height,
+            trace_width: (width / render_scale).max(1),
+            trace_height: (height / render_scale).max(1),
+        }
+    }
+}
+
+/// What one frame draws, once the view is uploaded.
+struct FramePlan {
+    /// Whether the view is traced afresh (else the image traced last is
+    /// shown, with its glare).
+    trace: bool,
+    /// Where the image goes.
+    place: Placement,
+    /// The display pass's uniform and the linear image.
+    display_group: wgpu::BindGroup,
+    /// egui's panels, tessellated.
+    paint: Vec<egui::ClippedPrimitive>,
+    /// The surface as egui sees it.
+    screen: egui_wgpu::ScreenDescriptor,
+    /// The screenshot's texture, on the last frame when one is asked for.
+    shot: Option<wgpu::Texture>,
+}
+
+impl Graphics {
+    /// Applies egui's new and changed textures.
+    fn update_egui_textures(&mut self, textures: &egui::TexturesDelta) {
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                self.egui_renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, *id, delta);
+            }
+        }
+    }
+
+    /// Frees the textures egui is done with, once the frame no longer uses
+    /// them.
+    fn free_egui_textures(&mut self, textures: &mut egui::TexturesDelta) {
+        for id in &textures.free {
+            self.egui_renderer.free_texture(id);
+        }
+        textures.clear();
+    }
+
+    /// Records and submits the frame: the trace (if the plan says so), then
+    /// the display pass and egui's panels into `frame` (and again into the
+    /// screenshot's texture); returns the screenshot's read-back buffer and
+    /// row pitch.
+    fn encode_and_submit(
+        &mut self,
+        frame: &wgpu::SurfaceTexture,
+        plan: &FramePlan,
+    ) -> Option<(wgpu::Buffer, u32)> {
+        let (fw, fh) = (self.config.width, self.config.height);
+        let place = &plan.place;
+        let target = frame.texture.create_view(&Default::default());
+        let mut encoder = self
             .gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        if trace {
-            g.tracer.dispatch(&mut encoder);
+        if plan.trace {
+            self.tracer.dispatch(&mut encoder);
         }
-        let mut commands = g.egui_renderer.update_buffers(
-            &g.gpu.device,
-            &g.gpu.queue,
+        let mut commands = self.egui_renderer.update_buffers(
+            &self.gpu.device,
+            &self.gpu.queue,
             &mut encoder,
-            &paint,
-            &screen,
+            &plan.paint,
+            &plan.screen,
         );
-        let shot_view = shot_texture
+        let shot_view = plan
+            .shot
             .as_ref()
             .map(|t| t.create_view(&Default::default()));
         for view in std::iter::once(&target).chain(shot_view.as_ref()) {
@@ -793,37 +934,28 @@ impl App {
                     multiview_mask: None,
                 })
                 .forget_lifetime();
-            pass.set_viewport(rx as f32, ry as f32, rw as f32, rh as f32, 0.0, 1.0);
-            pass.set_pipeline(&g.display);
-            pass.set_bind_group(0, &display_group, &[]);
+            pass.set_viewport(
+                place.x as f32,
+                place.y as f32,
+                place.width as f32,
+                place.height as f32,
+                0.0,
+                1.0,
+            );
+            pass.set_pipeline(&self.display);
+            pass.set_bind_group(0, &plan.display_group, &[]);
             pass.draw(0..3, 0..1);
             pass.set_viewport(0.0, 0.0, fw as f32, fh as f32, 0.0, 1.0);
-            g.egui_renderer.render(&mut pass, &paint, &screen);
+            self.egui_renderer
+                .render(&mut pass, &plan.paint, &plan.screen);
         }
-        let shot = shot_texture
+        let shot = plan
+            .shot
             .as_ref()
-            .map(|t| copy_to_buffer(&g.gpu.device, &mut encoder, t, 4));
+            .map(|t| copy_to_buffer(&self.gpu.device, &mut encoder, t, 4));
         commands.push(encoder.finish());
-        g.gpu.queue.submit(commands);
-        g.gpu.queue.present(frame);
-        for id in &textures.free {
-            g.egui_renderer.free_texture(id);
-        }
-        textures.clear();
-        if let (Some((buffer, row)), Some(path)) = (shot, &self.screenshot) {
-            let png = read_png(&g.gpu, &buffer, row, fw, fh, g.config.format)?;
-            write_atomic(path, &png)?;
-        }
-        self.frame_count += 1;
-        self.frame_ms = start.elapsed().as_secs_f64() * 1000.0;
-        if let Some(n) = &mut self.frames_left {
-            *n = n.saturating_sub(1);
-            if *n == 0 {
-                event_loop.exit();
-            }
-        }
-        self.graphics = Some(g);
-        Ok(())
+        self.gpu.queue.submit(commands);
+        shot
     }
 }
 

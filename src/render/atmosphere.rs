@@ -623,7 +623,7 @@ impl PhysicalSky {
         };
         // Cell size in radians is about 2/CELLS (the face spans ±45°).
         let cell = 2.0 / CELLS;
-        let margin = (self.star_radius / cell).min(0.45);
+        let margin = (self.star_radius / cell).min(STAR_MARGIN_MAX);
         let cu = iu + margin + u1 * (1.0 - 2.0 * margin);
         let cv = iv + margin + u2 * (1.0 - 2.0 * margin);
         let (du, dv) = ((fu - cu) * cell, (fv - cv) * cell);
@@ -645,6 +645,10 @@ impl PhysicalSky {
 
 /// Star cells along each edge of a cube-map face (about 1° wide).
 pub const STAR_CELLS: usize = 90;
+
+/// The largest margin (a fraction of a star cell) that keeps a star's place
+/// away from its cell's edges: the margin is a star radius, at most this.
+pub const STAR_MARGIN_MAX: f64 = 0.45;
 
 /// The brightest star's flux as a fraction of the sun's (Sirius against the
 /// sun).
