@@ -2,7 +2,7 @@
 //! residual and flags, and the totals F, summed and largest distance. This is
 //! what `mirage trace` writes and what a fit result reports at its end point.
 
-use crate::medium::{IndexField, LogisticMedium};
+use crate::medium::{IndexField, Medium};
 use crate::problem::{Problem, TraceSpec};
 use crate::trace::{End, RayState, Stats};
 use serde::Serialize;
@@ -47,7 +47,7 @@ pub struct TraceReport {
     /// Problem name.
     pub problem: String,
     /// The medium traced.
-    pub medium: LogisticMedium,
+    pub medium: Medium,
     /// Trace settings used.
     pub trace: TraceSpec,
     /// Totals.
@@ -62,7 +62,7 @@ pub struct TraceReport {
 /// Traces every pair of `problem` through `medium` and reports endpoints,
 /// distances, flags and totals. Pairs are traced in parallel; the result does
 /// not depend on the number of threads.
-pub fn trace_pairs(problem: &Problem, medium: &LogisticMedium) -> TraceReport {
+pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
     use rayon::prelude::*;
     let field = medium.field();
     let pairs: Vec<PairReport> = problem

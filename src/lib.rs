@@ -1,7 +1,7 @@
 //! mirage: inverse design of atmospheric mirages.
 //!
-//! Data flows one way: problem file → parameters ([`medium::LogisticMedium`]) →
-//! compiled medium ([`medium::IndexField`]) → rays ([`trace`]) → residuals →
+//! Data flows one way: problem file ([`problem`]) → parameters ([`medium::Medium`]) →
+//! compiled medium ([`medium::Field`]) → rays ([`trace`]) → residuals →
 //! solver → fitted medium → images.
 
 #![warn(missing_docs)]

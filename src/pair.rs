@@ -1,6 +1,7 @@
 //! Point pairs: "an observer at `origin` who looks toward `through` must see
 //! `target`", and the residual that measures how far the air is from that.
 
+use crate::error::FieldError;
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
 use crate::trace::{RayState, TargetPlane, Trace, TraceOptions, trace};
@@ -28,41 +29,38 @@ fn is_one(w: &f64) -> bool {
     *w == 1.0
 }
 
-/// Why a pair is invalid: (field, message).
-pub type PairError = (&'static str, String);
-
 impl PointPair {
     /// Checks the pair's geometry: finite coordinates, `through` ≠ `origin`, the
     /// target not straight above or below the origin, a non-negative weight.
-    pub fn validate(&self) -> Result<(), PairError> {
+    pub fn validate(&self) -> Result<(), FieldError> {
         for (name, v) in [
             ("origin", self.origin),
             ("through", self.through),
             ("target", self.target),
         ] {
             if v.iter().any(|c| !c.is_finite()) {
-                return Err((
+                return Err(FieldError::new(
                     name,
                     format!("coordinates must be finite numbers, got {v:?}"),
                 ));
             }
         }
         if !self.weight.is_finite() || self.weight < 0.0 {
-            return Err((
+            return Err(FieldError::new(
                 "weight",
                 format!("must be a finite number ≥ 0, got {}", self.weight),
             ));
         }
         let o = V3::from(self.origin);
         if (V3::from(self.through) - o).norm() == 0.0 {
-            return Err((
+            return Err(FieldError::new(
                 "through",
                 "equals `origin`, so there is no direction to look in".to_string(),
             ));
         }
         let d = V3::from(self.target) - o;
         if d.x.hypot(d.z) == 0.0 {
-            return Err((
+            return Err(FieldError::new(
                 "target",
                 "is straight above or below `origin`: the target plane (facing the observer) is undefined".to_string(),
             ));

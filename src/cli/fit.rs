@@ -3,10 +3,10 @@
 
 use super::trace::describe_trace;
 use crate::error::Result;
-use crate::problem::SolverMethod;
 use crate::fit::report::FitReport;
 use crate::io::{check_not_input, write_json};
 use crate::problem::Problem;
+use crate::problem::SolverMethod;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

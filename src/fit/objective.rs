@@ -9,7 +9,7 @@
 //! the derivative: no step-control noise, unlike finite differences.
 
 use crate::math::Real;
-use crate::medium::{LogisticField, LogisticMedium, Param};
+use crate::medium::{Field, Medium, Param};
 use crate::pair::PointPair;
 use crate::problem::Problem;
 use crate::trace::lanes::{BatchOptions, RayJob, trace_batch_into};
@@ -37,7 +37,7 @@ pub struct PairFlags {
 /// The residual map of a problem.
 #[derive(Debug)]
 pub struct Objective {
-    template: LogisticMedium,
+    template: Medium,
     free: Vec<Param>,
     pairs: Vec<PointPair>,
     jobs: Vec<RayJob>,
@@ -61,13 +61,13 @@ impl Clone for Objective {
 impl Objective {
     /// The residual map of `pairs` with the `free` parameters of `template`.
     pub fn new(
-        template: LogisticMedium,
+        template: impl Into<Medium>,
         free: Vec<Param>,
         pairs: Vec<PointPair>,
         options: TraceOptions,
     ) -> Self {
         Objective {
-            template,
+            template: template.into(),
             free,
             jobs: pairs.iter().map(RayJob::from_pair).collect(),
             pairs,
@@ -119,7 +119,7 @@ impl Objective {
     }
 
     /// The medium with the free parameters set to `x`.
-    pub fn medium(&self, x: &[f64]) -> LogisticMedium {
+    pub fn medium(&self, x: &[f64]) -> Medium {
         let mut m = self.template.clone();
         for (p, v) in self.free.iter().zip(x) {
             // Free parameters were checked to exist when the problem was loaded.
@@ -134,8 +134,13 @@ impl Objective {
     pub fn residuals(&self, x: &[f64]) -> (DVector<f64>, Vec<PairFlags>) {
         self.residual_evaluations.fetch_add(1, Ordering::Relaxed);
         let field = self.medium(x).field();
-        let traces: Vec<Trace> = match BatchOptions::from_trace_options(&self.options) {
-            Some(batch) => {
+        let traces: Vec<Trace> = match (
+            BatchOptions::from_trace_options(&self.options),
+            field.as_logistic(),
+        ) {
+            // The lanes kernel evaluates the logistic formula; other kinds take
+            // the general tracer.
+            (Some(batch), Some(field)) => {
                 let mut out = vec![Trace::default(); self.pairs.len()];
                 // Chunks of one lane width; the split is fixed, so threads only
                 // change who computes a chunk, not what it computes.
@@ -145,7 +150,7 @@ impl Objective {
                     .for_each(|(jobs, out)| trace_batch_into(&field, jobs, &batch, out));
                 out
             }
-            None => self
+            _ => self
                 .pairs
                 .par_iter()
                 .map(|pair| pair.evaluate::<f64, _>(&field, &self.options, None).0)
@@ -196,7 +201,7 @@ impl Objective {
 
     fn jacobian_chunk<const N: usize>(
         &self,
-        base: &LogisticMedium,
+        base: &Medium,
         cols: std::ops::Range<usize>,
         r: &mut DVector<f64>,
         jac: &mut DMatrix<f64>,
@@ -209,7 +214,7 @@ impl Objective {
                 None => D::<N>::from_re(v),
             }
         });
-        let field = LogisticField::new(&seeded);
+        let field = Field::new(&seeded);
         let rows: Vec<([f64; 3], [[f64; N]; 3], u64)> = self
             .pairs
             .par_iter()

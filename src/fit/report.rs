@@ -2,7 +2,7 @@
 //! "The result of a fit").
 
 use crate::evaluate::{PairReport, Totals};
-use crate::medium::LogisticMedium;
+use crate::medium::Medium;
 use crate::problem::{SolverMethod, TraceSpec};
 use serde::Serialize;
 
@@ -78,7 +78,7 @@ pub struct FitReport {
     /// Problem name.
     pub problem: String,
     /// The fitted medium, in the problem schema (reusable as input).
-    pub medium: LogisticMedium,
+    pub medium: Medium,
     /// The free parameters.
     pub parameters: Vec<ParamReport>,
     /// Parameter combinations the pairs cannot determine.

@@ -28,7 +28,9 @@
 //!   "hotspots": [ { "x": 0, "z": 600, "radius": 120, "n": -2, "a": -0.4 } ] }
 //! ```
 
+use super::envelope::{Envelope, Patch, VerticalFeature};
 use super::{HotField, IndexField, Param};
+use crate::error::FieldError;
 use crate::math::{Real, V3, sigmoid};
 use serde::{Deserialize, Serialize};
 
@@ -111,16 +113,6 @@ pub struct LogisticMedium<T = f64> {
     pub hotspots: Vec<HotSpot<T>>,
 }
 
-/// An invalid medium, with the parameter it concerns.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{field}: {message}")]
-pub struct MediumError {
-    /// Path of the offending field, relative to the medium (`hotspots[0].a`).
-    pub field: String,
-    /// What is wrong.
-    pub message: String,
-}
-
 impl<T: Copy> LogisticMedium<T> {
     /// Every parameter with its value, in a fixed order: scale, background,
     /// inversion, then each hot spot's x, z, radius, n, a, edge.
@@ -149,16 +141,13 @@ impl<T: Copy> LogisticMedium<T> {
     }
 
     /// Sets a parameter; errors if this medium has no such parameter.
-    pub fn set(&mut self, p: Param, value: T) -> Result<(), MediumError> {
+    pub fn set(&mut self, p: Param, value: T) -> Result<(), FieldError> {
         match self.slot_mut(p) {
             Some(slot) => {
                 *slot = value;
                 Ok(())
             }
-            None => Err(MediumError {
-                field: p.to_string(),
-                message: self.absent_reason(p),
-            }),
+            None => Err(FieldError::new(p.to_string(), self.absent_reason(p))),
         }
     }
 
@@ -179,6 +168,9 @@ impl<T: Copy> LogisticMedium<T> {
                 ),
             },
             Param::Scale => "always present".to_string(),
+            Param::LinearN0 | Param::LinearG => {
+                "a parameter of the analytic n²-linear kind, not of the logistic model".to_string()
+            }
         }
     }
 
@@ -221,6 +213,7 @@ impl<T: Copy> LogisticMedium<T> {
             Param::InversionA => self.inversion.as_ref().map(|i| &i.a),
             Param::InversionHeight => self.inversion.as_ref().map(|i| &i.height),
             Param::Hot(j, f) => self.hotspots.get(j).map(|h| h.field(f)),
+            Param::LinearN0 | Param::LinearG => None,
         }
     }
 
@@ -233,6 +226,7 @@ impl<T: Copy> LogisticMedium<T> {
             Param::InversionA => self.inversion.as_mut().map(|i| &mut i.a),
             Param::InversionHeight => self.inversion.as_mut().map(|i| &mut i.height),
             Param::Hot(j, f) => self.hotspots.get_mut(j).map(|h| h.field_mut(f)),
+            Param::LinearN0 | Param::LinearG => None,
         }
     }
 }
@@ -278,13 +272,8 @@ impl LogisticMedium<f64> {
 
     /// Checks every rule of `docs/model.md`; the first violation is returned with the
     /// path of the field it concerns.
-    pub fn validate(&self) -> Result<(), MediumError> {
-        let bad = |p: Param, message: String| {
-            Err(MediumError {
-                field: p.to_string(),
-                message,
-            })
-        };
+    pub fn validate(&self) -> Result<(), FieldError> {
+        let bad = |p: Param, message: String| Err(FieldError::new(p.to_string(), message));
         for (p, v) in self.params() {
             if !v.is_finite() {
                 return bad(p, format!("must be a finite number, got {v}"));
@@ -351,6 +340,61 @@ impl LogisticMedium<f64> {
     /// The compiled, evaluation-ready field.
     pub fn field(&self) -> LogisticField<f64> {
         LogisticField::new(self)
+    }
+
+    /// Bounds and features for stepping through the air ([`Envelope`]):
+    /// |D/S| ≤ 1 since every σ and w lies in [0, 1], so n ∈ [1 − k, 1 + k] with
+    /// k = C·|k_s|; |σ'| ≤ 1/4 bounds each term's gradient by its share of k
+    /// times ¼·(1/|a| + e).
+    pub fn envelope(&self) -> Envelope {
+        if !self.has_terms() {
+            return Envelope {
+                n_max: 1.0,
+                n_min: 1.0,
+                gradient_max: 0.0,
+                layers: Vec::new(),
+                patches: Vec::new(),
+            };
+        }
+        let k = C_SCALE * self.scale.abs();
+        let s = self.amplitude_sum();
+        let share = |n: f64| if s > 0.0 { n.abs() / s } else { 0.0 };
+        let mut g = 0.0;
+        let mut layers = Vec::new();
+        if let Some(b) = &self.background {
+            g += share(b.n) * 0.25 / b.a.abs();
+            layers.push(VerticalFeature {
+                scale: b.a.abs(),
+                centre: 0.0,
+            });
+        }
+        if let Some(i) = &self.inversion {
+            g += share(i.n) * 0.25 / i.a.abs();
+            layers.push(VerticalFeature {
+                scale: i.a.abs(),
+                centre: i.height,
+            });
+        }
+        for h in &self.hotspots {
+            g += share(h.n) * 0.25 * (1.0 / h.a.abs() + h.edge);
+        }
+        Envelope {
+            n_max: 1.0 + k,
+            n_min: 1.0 - k,
+            gradient_max: k * g,
+            layers,
+            patches: self
+                .hotspots
+                .iter()
+                .map(|h| Patch {
+                    x: h.x,
+                    z: h.z,
+                    radius: h.radius,
+                    edge: h.edge,
+                    rate: h.a,
+                })
+                .collect(),
+        }
     }
 }
 

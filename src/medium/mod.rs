@@ -1,19 +1,24 @@
 //! The refractive index of the air, as δ = n − 1 (see `docs/model.md`).
 //!
 //! - [`IndexField`] is the one thing the tracer needs from a medium: δ and ∇δ at
-//!   a point. The logistic model implements it, and so do the analytic media in
-//!   [`analytic`] that the tests trace against exact answers.
-//! - [`LogisticMedium`] holds the model's parameters (what files and the fitter
-//!   see); [`LogisticField`] is its compiled, evaluation-ready form.
+//!   a point.
+//! - [`Medium`] is the closed set of kinds, by their parameters (what files and
+//!   the fitter see), and [`Field`] the same kinds compiled for evaluation; both
+//!   dispatch statically (an `enum` and a `match`, in `kind.rs`). The kinds: the
+//!   logistic model ([`LogisticMedium`], compiled [`LogisticField`]) and the
+//!   analytic n²-linear medium ([`analytic::LinearSquare`]).
+//! - [`Envelope`] gives the bounds and features a stepper needs beyond δ.
 //! - [`Param`] names every parameter by its path (`hotspots[2].radius`).
 
 pub mod analytic;
+mod envelope;
+mod kind;
 mod logistic;
 mod params;
 
-pub use logistic::{
-    Background, C_SCALE, HotSpot, Inversion, LogisticField, LogisticMedium, MediumError,
-};
+pub use envelope::{Envelope, Patch, VerticalFeature};
+pub use kind::{Field, Medium};
+pub use logistic::{Background, C_SCALE, HotSpot, Inversion, LogisticField, LogisticMedium};
 pub use params::{HotField, Param, ParamParseError};
 
 use crate::math::{Real, V3};

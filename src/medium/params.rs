@@ -1,4 +1,5 @@
-//! Parameter path names: one vocabulary for files, the fitter and the reports.
+//! Parameter path names: one vocabulary for files, the fitter and the reports,
+//! over every kind of medium (each kind answers only for its own paths).
 
 use std::fmt;
 use std::str::FromStr;
@@ -44,7 +45,7 @@ impl HotField {
     }
 }
 
-/// A parameter of the logistic medium, addressed by its path name.
+/// A parameter of a medium, addressed by its path name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Param {
     /// `scale`: k_s.
@@ -61,6 +62,10 @@ pub enum Param {
     InversionHeight,
     /// `hotspots[j].<field>`.
     Hot(usize, HotField),
+    /// `linear_square.n0`: n at y = 0 of the analytic n²-linear kind.
+    LinearN0,
+    /// `linear_square.g`: d(n²)/dy of the analytic n²-linear kind (per metre).
+    LinearG,
 }
 
 impl Param {
@@ -84,6 +89,8 @@ impl fmt::Display for Param {
             Param::InversionA => f.write_str("inversion.a"),
             Param::InversionHeight => f.write_str("inversion.height"),
             Param::Hot(j, field) => write!(f, "hotspots[{j}].{}", field.name()),
+            Param::LinearN0 => f.write_str("linear_square.n0"),
+            Param::LinearG => f.write_str("linear_square.g"),
         }
     }
 }
@@ -107,6 +114,8 @@ impl FromStr for Param {
             "inversion.n" => Param::InversionN,
             "inversion.a" => Param::InversionA,
             "inversion.height" => Param::InversionHeight,
+            "linear_square.n0" => Param::LinearN0,
+            "linear_square.g" => Param::LinearG,
             _ => {
                 let rest = s.strip_prefix("hotspots[").ok_or_else(err)?;
                 let (index, field) = rest.split_once("].").ok_or_else(err)?;
@@ -137,6 +146,8 @@ mod tests {
             Param::InversionN,
             Param::InversionA,
             Param::InversionHeight,
+            Param::LinearN0,
+            Param::LinearG,
         ];
         all.extend(HotField::ALL.map(|f| Param::Hot(12, f)));
         for p in all {

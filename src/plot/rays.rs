@@ -9,7 +9,7 @@ use super::{
 use crate::error::Result;
 use crate::evaluate::pair_report;
 use crate::math::V3;
-use crate::medium::{IndexField, LogisticMedium};
+use crate::medium::{IndexField, Medium};
 use crate::problem::Problem;
 use crate::trace::RayState;
 use plotters::coord::Shift;
@@ -50,7 +50,7 @@ fn tint(c: RGBColor, t: f64) -> RGBColor {
 /// and, beside it on the same heights, δ(y) above the first pair's origin and
 /// over each hot spot centre. The format follows the extension of `output`
 /// (`.png` or `.svg`); the file is written atomically.
-pub fn draw_rays(problem: &Problem, medium: &LogisticMedium, output: &Path) -> Result<()> {
+pub fn draw_rays(problem: &Problem, medium: &Medium, output: &Path) -> Result<()> {
     // Refuse a bad extension before spending time on tracing.
     super::ImageFormat::from_path(output)?;
     let figure = RayFigure::new(problem, medium);
@@ -182,7 +182,7 @@ fn describe_method(problem: &Problem) -> String {
 }
 
 impl RayFigure {
-    fn new(problem: &Problem, medium: &LogisticMedium) -> RayFigure {
+    fn new(problem: &Problem, medium: &Medium) -> RayFigure {
         use rayon::prelude::*;
         let field = medium.field();
         let traced: Vec<_> = problem
@@ -279,7 +279,7 @@ impl RayFigure {
         if let Some(pair) = problem.pairs.first() {
             let o = pair.origin();
             let u = pair.plane().normal;
-            for (j, h) in medium.hotspots.iter().enumerate() {
+            for (j, h) in medium.envelope().patches.iter().enumerate() {
                 let (dx, dz) = (o.x - h.x, o.z - h.z);
                 let b = dx * u.x + dz * u.z;
                 let c = dx * dx + dz * dz - h.radius * h.radius;
@@ -325,7 +325,7 @@ impl RayFigure {
             dashed: false,
             points: column(px, pz),
         }];
-        for (j, h) in medium.hotspots.iter().enumerate() {
+        for (j, h) in medium.envelope().patches.iter().enumerate() {
             profiles.push(Profile {
                 label: format!("δ over hotspots[{j}]"),
                 color: hot_color(j),

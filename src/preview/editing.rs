@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::evaluate::trace_pairs;
 use crate::fit::IterationRecord;
 use crate::io::write_atomic;
-use crate::medium::{HotField, HotSpot, LogisticMedium, Param};
+use crate::medium::{HotField, HotSpot, LogisticMedium, Medium, Param};
 use crate::problem::Problem;
 use crate::render::camera::Camera;
 use glam::{DVec2, DVec3};
@@ -42,6 +42,7 @@ pub fn slider_range(p: Param, start: f64, bounds: Option<(f64, f64)>) -> (f64, f
         }
         Param::Hot(_, HotField::Radius) => (0.0, (4.0 * m).max(100.0)),
         Param::Hot(_, HotField::Edge) => (0.01, (4.0 * m).max(20.0)),
+        Param::LinearN0 | Param::LinearG => (start - (m.max(1e-6)), start + m.max(1e-6)),
     };
     (lo.min(start), hi.max(start))
 }
@@ -142,7 +143,7 @@ pub fn new_hot_spot(medium: &LogisticMedium, at: DVec2) -> HotSpot {
 /// The current distance of every pair's endpoint from its target (metres;
 /// infinite for a ray that never reaches its target plane).
 pub fn pair_distances(problem: &Problem, medium: &LogisticMedium) -> Vec<f64> {
-    trace_pairs(problem, medium)
+    trace_pairs(problem, &Medium::Logistic(medium.clone()))
         .pairs
         .iter()
         .map(|p| {
@@ -190,7 +191,7 @@ pub fn edited_path(input: &Path) -> PathBuf {
 pub fn save(input: &Path, medium: &LogisticMedium, out: &Path) -> Result<()> {
     medium
         .validate()
-        .map_err(|e| Error::input(out, format!("medium.{}", e.field), e.message))?;
+        .map_err(|e| e.within("medium").in_file(out))?;
     let text = crate::io::json::read_input(input)?;
     let edited = with_medium(&text, input, medium)?;
     write_atomic(out, edited.as_bytes())
@@ -224,7 +225,7 @@ impl FitJob {
             ..FitProgress::default()
         }));
         let mut problem = problem.clone();
-        problem.medium = medium.clone();
+        problem.medium = Medium::Logistic(medium.clone());
         let seen = Arc::clone(&progress);
         let done = Arc::clone(&progress);
         std::thread::spawn(move || {
@@ -239,7 +240,7 @@ impl FitJob {
                     }
                 });
             let result = crate::fit::fit(&problem, Some(hook))
-                .map(|report| report.medium)
+                .and_then(|report| super::logistic(&report.medium, &problem.source).cloned())
                 .map_err(Arc::new);
             if let Ok(mut p) = done.lock() {
                 p.done = Some(result);
@@ -325,8 +326,9 @@ mod tests {
     fn the_background_fit_reports_progress_and_lands_the_pairs() {
         let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
         let problem = Problem::load(&input).unwrap();
-        let before = pair_distances(&problem, &problem.medium);
-        let job = FitJob::start(&problem, &problem.medium);
+        let start_medium = problem.medium.as_logistic().unwrap().clone();
+        let before = pair_distances(&problem, &start_medium);
+        let job = FitJob::start(&problem, &start_medium);
         let start = std::time::Instant::now();
         let progress = loop {
             let p = job.progress();
@@ -351,11 +353,16 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/hot-road.json");
         let out = dir.path().join("edited.json");
-        let mut m = Problem::load(&input).unwrap().medium;
+        let mut m = Problem::load(&input)
+            .unwrap()
+            .medium
+            .as_logistic()
+            .unwrap()
+            .clone();
         m.scale *= 1.5;
         save(&input, &m, &out).unwrap();
         let back = Problem::load(&out).unwrap();
-        assert_eq!(back.medium, m);
+        assert_eq!(back.medium, Medium::Logistic(m.clone()));
         assert_eq!(back.pairs, Problem::load(&input).unwrap().pairs);
         // An invalid medium is refused and nothing is written.
         let bad_out = dir.path().join("bad.json");

@@ -24,10 +24,10 @@ pub mod program;
 pub mod shader;
 pub mod window;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, FieldError, Result};
 use crate::io::json::{parse_json, read_input};
 use crate::io::{check_not_input, write_atomic};
-use crate::medium::LogisticMedium;
+use crate::medium::{LogisticMedium, Medium};
 use crate::plot::ImageFormat;
 use crate::problem::Problem;
 use crate::render::output::{ToneMap, encode_png};
@@ -55,8 +55,30 @@ pub struct Input {
     pub problem: Option<Problem>,
 }
 
-/// Reads a scene or a problem file (a scene has a `camera`, a problem `pairs`).
+/// The logistic parameters of `medium`, or the error that the previewer (whose
+/// shader and editor evaluate the logistic model) cannot show this kind.
+pub fn logistic<'a>(medium: &'a Medium, file: &Path) -> Result<&'a LogisticMedium> {
+    medium.as_logistic().ok_or_else(|| {
+        FieldError::new(
+            "medium",
+            format!(
+                "the previewer shows the logistic model only; this medium is of kind `{}` (use `mirage render`)",
+                medium.kind_name()
+            ),
+        )
+        .in_file(file)
+    })
+}
+
+/// Reads a scene or a problem file (a scene has a `camera`, a problem `pairs`);
+/// its medium must be of the logistic kind ([`logistic`]).
 pub fn load_input(path: &Path) -> Result<Input> {
+    let input = load_any_input(path)?;
+    logistic(&input.scene.medium, path)?;
+    Ok(input)
+}
+
+fn load_any_input(path: &Path) -> Result<Input> {
     let text = read_input(path)?;
     let value: serde_json::Value = parse_json(&text, path, "scene or problem")?;
     let is_scene = value.get("camera").is_some();
@@ -141,7 +163,7 @@ pub fn open_gpu() -> Result<Gpu> {
 pub fn render_frame(
     gpu: &Gpu,
     scene: &Scene,
-    medium: &LogisticMedium,
+    medium: &Medium,
     view: &View,
 ) -> Result<Vec<[f32; 3]>> {
     let buffers = pack(scene, medium, view).map_err(|e| e.in_file(&scene.source))?;

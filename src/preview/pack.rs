@@ -14,7 +14,7 @@ use super::layout::{
 };
 use super::program::compile_objects;
 use crate::error::FieldError;
-use crate::medium::LogisticMedium;
+use crate::medium::{LogisticMedium, Medium};
 use crate::render::accel::{Aabb, Grid};
 use crate::render::air::Air;
 use crate::render::atmosphere::{STAR_CELLS, STAR_FADE, star_cell, star_radius};
@@ -142,11 +142,16 @@ pub fn star_cells() -> Vec<[f32; 4]> {
 
 /// Packs `scene` (with `medium` instead of the scene's own, so that the
 /// editor can change the air without rebuilding the scene) for `view`.
-pub fn pack(
-    scene: &Scene,
-    medium: &LogisticMedium,
-    view: &View,
-) -> Result<SceneBuffers, FieldError> {
+pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers, FieldError> {
+    if medium.as_logistic().is_none() {
+        return Err(FieldError::new(
+            "medium",
+            format!(
+                "the previewer's shader evaluates the logistic model only; this medium is of kind `{}`",
+                medium.kind_name()
+            ),
+        ));
+    }
     // As the CPU renderer: seen from the scene camera's altitude.
     let sky = SkyModel::from_spec(
         &scene.sky,
@@ -298,7 +303,11 @@ impl SceneBuffers {
     /// Sets the medium and what follows from it (the air's analysis).
     pub fn set_air(&mut self, air: &Air) {
         let p = &mut self.params;
-        let raw = air.field().coefficients();
+        // `pack` admits the logistic kind only; anything else packs as δ ≡ 0.
+        let raw = match air.field().as_logistic() {
+            Some(f) => f.coefficients(),
+            None => LogisticMedium::vacuum().field().coefficients(),
+        };
         p.flags[1] = air.is_straight() as u32;
         p.background = match raw.background {
             Some([amp, inv]) => [amp as f32, inv as f32, 1.0, 0.0],

@@ -29,7 +29,7 @@ use super::gpu::{Gpu, Tracer, copy_to_buffer};
 use super::pack::{SceneBuffers, View, pack};
 use crate::error::{Error, FieldError, Result};
 use crate::io::write_atomic;
-use crate::medium::{LogisticMedium, Param};
+use crate::medium::{LogisticMedium, Medium, Param};
 use crate::render::Shading;
 use crate::render::accel::Aabb;
 use crate::render::air::Air;
@@ -137,7 +137,13 @@ impl App {
         frames: Option<u64>,
         screenshot: Option<PathBuf>,
     ) -> App {
-        let medium = input.scene.medium.clone();
+        // load_input admits the logistic kind only.
+        let medium = input
+            .scene
+            .medium
+            .as_logistic()
+            .cloned()
+            .unwrap_or_else(LogisticMedium::vacuum);
         let bounds = |p: Param| {
             input
                 .problem
@@ -254,8 +260,12 @@ impl App {
         };
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
-        let buffers = pack(&self.input.scene, &self.medium, &view)
-            .map_err(|e| e.in_file(&self.input.path))?;
+        let buffers = pack(
+            &self.input.scene,
+            &Medium::Logistic(self.medium.clone()),
+            &view,
+        )
+        .map_err(|e| e.in_file(&self.input.path))?;
         let tracer = Tracer::new(&gpu, &buffers);
         let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
         let egui_state = egui_winit::State::new(
@@ -561,7 +571,7 @@ impl App {
     fn apply_medium(&mut self) {
         self.medium_dirty = false;
         if let Err(e) = self.medium.validate() {
-            self.medium_error = Some(FieldError::new(format!("medium.{}", e.field), e.message));
+            self.medium_error = Some(e.within("medium"));
             return;
         }
         self.medium_error = None;
@@ -571,7 +581,7 @@ impl App {
         if let Some(g) = &mut self.graphics {
             let scene = &self.input.scene;
             let air = Air::new(
-                &self.medium,
+                &Medium::Logistic(self.medium.clone()),
                 self.straight,
                 scene.step,
                 scene.ground.is_some(),

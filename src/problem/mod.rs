@@ -17,7 +17,7 @@
 //!
 //! | field | meaning |
 //! | --- | --- |
-//! | `medium` | the starting medium ([`LogisticMedium`]); a term left out is not modelled |
+//! | `medium` | the starting medium ([`Medium`]: the logistic model of `docs/model.md`); a term left out is not modelled |
 //! | `free` | parameters the fit may change, by path name; absent: trace and report only |
 //! | `bounds` | optional `[low, high]` per free parameter |
 //! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight` |
@@ -32,7 +32,7 @@ pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
 
 use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
-use crate::medium::{LogisticMedium, Param};
+use crate::medium::{Medium, Param};
 use crate::pair::PointPair;
 use crate::trace::TraceOptions;
 use serde::{Deserialize, Serialize};
@@ -50,7 +50,7 @@ pub struct ProblemFile {
     #[serde(default)]
     pub description: Option<String>,
     /// Starting medium.
-    pub medium: LogisticMedium,
+    pub medium: Medium,
     /// Free parameters by path name.
     #[serde(default)]
     pub free: Vec<String>,
@@ -77,7 +77,7 @@ pub struct Problem {
     /// What a user would see.
     pub description: String,
     /// Starting medium (valid per `docs/model.md`).
-    pub medium: LogisticMedium,
+    pub medium: Medium,
     /// Free parameters, in the order of the file.
     pub free: Vec<Param>,
     /// `[low, high]` per free parameter (±∞ where unbounded).
@@ -110,11 +110,11 @@ impl Problem {
         let bad = |field: String, message: String| Error::input(path, field, message);
         file.medium
             .validate()
-            .map_err(|e| bad(format!("medium.{}", e.field), e.message))?;
+            .map_err(|e| e.within("medium").in_file(path))?;
 
         for (i, pair) in file.pairs.iter().enumerate() {
             pair.validate()
-                .map_err(|(f, m)| bad(format!("pairs[{i}].{f}"), m))?;
+                .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
         }
 
         let mut free = Vec::with_capacity(file.free.len());

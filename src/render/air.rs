@@ -23,7 +23,7 @@
 
 use super::accel::Aabb;
 use crate::math::V3;
-use crate::medium::{C_SCALE, IndexField, LogisticField, LogisticMedium};
+use crate::medium::{Field, IndexField, LogisticMedium, Medium, VerticalFeature};
 use glam::{DVec2, DVec3};
 
 /// Where a logistic term's σ is within e^(−ZONE_UNITS) of its limit: the term
@@ -132,7 +132,7 @@ pub enum Fate {
 /// The air as the renderer sees it.
 #[derive(Clone, Debug)]
 pub struct Air {
-    field: LogisticField,
+    field: Field,
     straight: bool,
     stratified: bool,
     n_max: f64,
@@ -145,83 +145,60 @@ pub struct Air {
     objects: Option<Aabb>,
 }
 
-/// Every logistic term as (amplitude share, rate, centre height), the share
-/// being |n|/S so that C·|k_s|·share bounds the term's δ.
-fn terms(m: &LogisticMedium) -> Vec<(f64, f64, f64)> {
-    let s = m.amplitude_sum();
-    let share = |n: f64| if s > 0.0 { n.abs() / s } else { 0.0 };
-    let mut out = Vec::new();
-    if let Some(b) = &m.background {
-        out.push((share(b.n), b.a, 0.0));
-    }
-    if let Some(i) = &m.inversion {
-        out.push((share(i.n), i.a, i.height));
-    }
-    out
-}
-
 impl Air {
     /// Analyses `medium` (or δ ≡ 0 when `straight`) for rendering with RK4
     /// steps of `step` metres. `ground`: whether the plane y = 0 stops rays;
     /// `objects`: the box holding every object (None: no objects).
     pub fn new(
-        medium: &LogisticMedium,
+        medium: &Medium,
         straight: bool,
         step: f64,
         ground: bool,
         objects: Option<Aabb>,
     ) -> Air {
         let medium = if straight || !medium.has_terms() {
-            LogisticMedium::vacuum()
+            Medium::Logistic(LogisticMedium::vacuum())
         } else {
             medium.clone()
         };
         let straight = !medium.has_terms();
         let field = medium.field();
-        let k = C_SCALE * medium.scale.abs();
-        let s = medium.amplitude_sum();
+        let envelope = medium.envelope();
         let (n_max, curvature_max) = if straight {
             (1.0, 0.0)
         } else {
-            // |D/S| ≤ 1 since every σ and w lies in [0, 1]; |σ'| ≤ 1/4.
-            let mut g = 0.0;
-            for (share, a, _) in terms(&medium) {
-                g += share * 0.25 / a.abs();
-            }
-            for h in &medium.hotspots {
-                let share = h.n.abs() / s;
-                g += share * 0.25 * (1.0 / h.a.abs() + h.edge);
-            }
-            ((1.0 + k), k * g / (1.0 - k))
+            // A ray's curvature is |∇n ⊥ t| / n ≤ |∇δ|max / n_min.
+            (envelope.n_max, envelope.gradient_max / envelope.n_min)
         };
 
-        let zones: Vec<Zone> = medium
-            .hotspots
+        let zones: Vec<Zone> = envelope
+            .patches
             .iter()
             .map(|h| Zone {
                 x: h.x,
                 z: h.z,
                 radius: h.radius + ZONE_UNITS / h.edge,
-                top: if h.a < 0.0 {
-                    ZONE_UNITS * h.a.abs()
+                top: if h.rate < 0.0 {
+                    ZONE_UNITS * h.rate.abs()
                 } else {
                     f64::INFINITY
                 },
-                decay: if h.a < 0.0 { h.a.abs() } else { 0.0 },
+                decay: if h.rate < 0.0 { h.rate.abs() } else { 0.0 },
             })
             .collect();
 
         // Finest feature of the whole air, and of its stratified part: steps
         // outside the zones may grow by their ratio (capped), since RK4's error
         // scales with (step / feature)^4.
-        let strat_scale = terms(&medium)
+        let strat_scale = envelope
+            .layers
             .iter()
-            .map(|t| t.1.abs())
+            .map(|t| t.scale)
             .fold(f64::INFINITY, f64::min);
-        let fine_scale = medium
-            .hotspots
+        let fine_scale = envelope
+            .patches
             .iter()
-            .flat_map(|h| [h.a.abs(), 1.0 / h.edge])
+            .flat_map(|h| [h.rate.abs(), 1.0 / h.edge])
             .fold(strat_scale, f64::min);
         let step_inside = if straight { f64::INFINITY } else { step };
         let step_outside = if straight {
@@ -232,11 +209,11 @@ impl Air {
             STEP_GROWTH_MAX * step
         };
 
-        let profile = Self::profile(&field, &medium, curvature_max * n_max);
+        let profile = Self::profile(&field, &envelope.layers, curvature_max * n_max);
         Air {
             field,
             straight,
-            stratified: medium.hotspots.is_empty(),
+            stratified: envelope.patches.is_empty(),
             n_max,
             curvature_max,
             step_inside,
@@ -248,14 +225,13 @@ impl Air {
         }
     }
 
-    fn profile(field: &LogisticField, medium: &LogisticMedium, gradient_max: f64) -> Profile {
-        let ts = terms(medium);
-        let top = ts
+    fn profile(field: &Field, layers: &[VerticalFeature], gradient_max: f64) -> Profile {
+        let top = layers
             .iter()
-            .map(|&(_, a, c)| c + 2.0 * ZONE_UNITS * a.abs())
+            .map(|l| l.centre + 2.0 * ZONE_UNITS * l.scale)
             .fold(100.0, f64::max)
             .min(50_000.0);
-        let finest = ts.iter().map(|t| t.1.abs()).fold(f64::INFINITY, f64::min);
+        let finest = layers.iter().map(|l| l.scale).fold(f64::INFINITY, f64::min);
         let dy = (finest / 16.0).max(top / 400_000.0).min(1.0);
         let n = (top / dy).ceil() as usize + 1;
         // Far outside every hot spot the rim factor w underflows to exactly 0,
@@ -282,7 +258,7 @@ impl Air {
     }
 
     /// The compiled field (δ ≡ 0 when straight).
-    pub fn field(&self) -> &LogisticField {
+    pub fn field(&self) -> &Field {
         &self.field
     }
 

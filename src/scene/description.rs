@@ -21,7 +21,7 @@
 //! | field | meaning |
 //! | --- | --- |
 //! | `camera` | pinhole camera: `position`, `look_at` (metres), `up` (default `[0, 1, 0]`), `vertical_fov` (degrees, any value in (0, 179]; telephoto fractions of a degree are fine), `width`, `height` (pixels) |
-//! | `medium` | the air, inline ([`LogisticMedium`], as in problem files) |
+//! | `medium` | the air, inline ([`Medium`], as in problem files) |
 //! | `medium_from` | instead of `medium`: a JSON file (path relative to the scene file) whose `medium` field is read, e.g. the result of `mirage fit`, or a problem file (its starting air) |
 //! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
 //! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
@@ -39,7 +39,7 @@ use super::glare::{AngularGlare, GlareSpec};
 use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
-use crate::medium::LogisticMedium;
+use crate::medium::Medium;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -192,7 +192,7 @@ pub struct SceneFile {
     pub camera: CameraSpec,
     /// The air, inline.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub medium: Option<LogisticMedium>,
+    pub medium: Option<Medium>,
     /// The air, read from another file's `medium` field.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub medium_from: Option<PathBuf>,
@@ -291,7 +291,7 @@ pub struct Scene {
     /// The camera.
     pub camera: CameraSettings,
     /// The air (valid per `docs/model.md`).
-    pub medium: LogisticMedium,
+    pub medium: Medium,
     /// The ground, if any.
     pub ground: Option<GroundAlbedo>,
     /// The objects (validated).
@@ -433,8 +433,7 @@ impl Scene {
                 ));
             }
             (Some(m), None) => {
-                m.validate()
-                    .map_err(|e| Error::input(path, format!("medium.{}", e.field), e.message))?;
+                m.validate().map_err(|e| e.within("medium").in_file(path))?;
                 m
             }
             (None, Some(from)) => {
@@ -622,7 +621,7 @@ struct MediumOnly {
 
 /// Reads the `medium` field of `file`; errors name that file (and, when it
 /// cannot be read at all, the scene's `medium_from` field).
-fn medium_from_file(file: &Path, scene: &Path) -> Result<LogisticMedium> {
+fn medium_from_file(file: &Path, scene: &Path) -> Result<Medium> {
     let text = std::fs::read_to_string(file).map_err(|e| {
         Error::input(
             scene,
@@ -631,7 +630,7 @@ fn medium_from_file(file: &Path, scene: &Path) -> Result<LogisticMedium> {
         )
     })?;
     let holder: MediumOnly = parse_json(&text, file, "result")?;
-    let medium: LogisticMedium = serde_path_to_error::deserialize(holder.medium).map_err(|e| {
+    let medium: Medium = serde_path_to_error::deserialize(holder.medium).map_err(|e| {
         let field = e.path().to_string();
         let field = if field == "." {
             "medium".to_string()
@@ -642,6 +641,6 @@ fn medium_from_file(file: &Path, scene: &Path) -> Result<LogisticMedium> {
     })?;
     medium
         .validate()
-        .map_err(|e| Error::input(file, format!("medium.{}", e.field), e.message))?;
+        .map_err(|e| e.within("medium").in_file(file))?;
     Ok(medium)
 }
