@@ -178,9 +178,9 @@ impl<const N: usize> Kernel<N> for Lanes3<N> {
 
     #[inline(always)]
     fn step<const FMA: bool>(&mut self) {
-        let c = &self.c;
-        self.set
-            .step(|h, y0, stages, y1| rk4_3d::<N, FMA>(c, h, y0, stages, y1));
+        let (h, y0, stages, y1) = self.set.step_parts();
+        rk4_3d::<N, FMA>(&self.c, h, y0, stages, y1);
+        self.set.flip();
     }
 
     #[inline(always)]
@@ -207,7 +207,7 @@ impl<const N: usize> Kernel<N> for Lanes3<N> {
 /// distinct reference: the compiler then knows they do not overlap and
 /// vectorizes each lane loop (through `self` it could not tell `y0` from `y1`,
 /// two elements of one array, and kept the final sum scalar; see
-/// [`LaneSet::step`]).
+/// [`LaneSet::step_parts`]).
 #[inline(always)]
 fn rk4_3d<const N: usize, const FMA: bool>(
     c: &Coefficients,

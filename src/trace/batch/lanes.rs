@@ -116,20 +116,29 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
         self.max_length[lane] = f64::INFINITY;
     }
 
-    /// One step of every lane: `rk4(h, y0, stages, y1)` writes the new state
-    /// `y1` from the current one `y0`, which then becomes the previous one.
-    /// The arguments are distinct references, so that the compiler knows they
-    /// do not overlap and vectorizes each lane loop (through `self` it could
-    /// not tell `y0` from `y1`, two elements of one array).
+    /// The parts of a step of every lane: the steps h, the current state
+    /// `y0`, the stages and the buffer `y1` for the new state; [`Self::flip`]
+    /// then makes `y1` current and `y0` the previous state. They are distinct
+    /// references, so that the compiler knows they do not overlap and
+    /// vectorizes each lane loop (through `self` it could not tell `y0` from
+    /// `y1`, two elements of one array). Not a closure: a closure is compiled
+    /// without the caller's target features, and its fused multiply–adds
+    /// would become calls to the software `fma`.
     #[inline(always)]
-    pub(crate) fn step(&mut self, rk4: impl FnOnce(&[f64; N], &B, &mut [B; 3], &mut B)) {
+    pub(crate) fn step_parts(&mut self) -> (&[f64; N], &B, &mut [B; 3], &mut B) {
         let (first, second) = self.buf.split_at_mut(1);
         let (y0, y1) = if self.cur == 0 {
             (&first[0], &mut second[0])
         } else {
             (&second[0], &mut first[0])
         };
-        rk4(&self.h, y0, &mut self.stages, y1);
+        (&self.h, y0, &mut self.stages, y1)
+    }
+
+    /// After a step written by [`Self::step_parts`]: the new state becomes
+    /// the current one.
+    #[inline(always)]
+    pub(crate) fn flip(&mut self) {
         self.cur ^= 1;
     }
 
@@ -173,7 +182,8 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     }
 }
 
-/// The event screen on distinct references (see [`LaneSet::step`] for why):
+/// The event screen on distinct references (see [`LaneSet::step_parts`] for
+/// why):
 /// updates the nearest points from `now` and returns the lanes whose step
 /// from `y0` to `y1` (each x, y, z, v_y, s) may cross the plane, go below
 /// the ground, or reach the maximum length.
@@ -197,8 +207,8 @@ fn scan<const N: usize, const M: usize>(
         let d = g.abs();
         let closer = d < near_d[i];
         near_d[i] = if closer { d } else { near_d[i] };
-        for (nk, vk) in near.iter_mut().zip(now) {
-            nk[i] = if closer { vk[i] } else { nk[i] };
+        for k in 0..M {
+            near[k][i] = if closer { now[k][i] } else { near[k][i] };
         }
         let crossed = g >= -CROSSING_MARGIN;
         let ground = (y0y[i] >= 0.0) & ((y[i] < 0.0) | ((y0vy[i] < 0.0) & (vy[i] > 0.0)));

@@ -193,9 +193,9 @@ impl<const N: usize> Kernel<N> for Lanes2<N> {
 
     #[inline(always)]
     fn step<const FMA: bool>(&mut self) {
-        let (c, v) = (&self.c, [&self.vx, &self.vz]);
-        self.set
-            .step(|h, y0, stages, y1| rk4_2d::<N, FMA>(c, h, v, y0, stages, y1));
+        let (h, y0, stages, y1) = self.set.step_parts();
+        rk4_2d::<N, FMA>(&self.c, h, [&self.vx, &self.vz], y0, stages, y1);
+        self.set.flip();
     }
 
     #[inline(always)]
