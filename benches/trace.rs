@@ -16,8 +16,10 @@ use mirage::fit::objective::Objective;
 use mirage::math::V3;
 use mirage::medium::{Background, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium};
 use mirage::problem::Problem;
-use mirage::trace::lanes::{BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_3d};
-use mirage::trace::stratified::trace_batch_2d;
+use mirage::pair::PointPair;
+use mirage::trace::batch::{
+    BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_2d, trace_batch_3d,
+};
 use mirage::trace::{End, Method, TargetPlane, Trace, TraceOptions, trace};
 use std::hint::black_box;
 use std::path::Path;
@@ -316,7 +318,7 @@ fn table() {
     let field = objective.medium(&x).field();
     let field = field.as_logistic().expect("a logistic problem");
     let pairs = objective.pairs();
-    let batch_jobs: Vec<RayJob> = pairs.iter().map(RayJob::from_pair).collect();
+    let batch_jobs: Vec<RayJob> = pairs.iter().map(PointPair::ray_job).collect();
     let batch = BatchOptions::from_trace_options(objective.options()).unwrap();
     // Wall time for both: the objective traces on the pool's thread.
     let lanes = best_wall_time(|| {

@@ -158,6 +158,41 @@ pub fn sigmoid<T: Real>(t: T) -> (T, T) {
     (s, e * inv * inv)
 }
 
+/// SplitMix64's increment γ (the golden ratio times 2⁶⁴).
+const SPLITMIX_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// SplitMix64 (Steele, Lea & Flood 2014) as a hash: the generator's output
+/// for the state `x`, i.e. `x + γ` mixed. Tiny, seedable and identical on
+/// every platform, which is all mirage needs of random numbers (reproducible
+/// starting points, star fields, test rays).
+#[inline]
+pub fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(SPLITMIX_GAMMA);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The SplitMix64 generator: its state, advanced by γ per number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplitMix64(pub u64);
+
+impl SplitMix64 {
+    /// The next 64 random bits.
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        let z = splitmix64(self.0);
+        self.0 = self.0.wrapping_add(SPLITMIX_GAMMA);
+        z
+    }
+
+    /// The next number, uniform in [0, 1) (53 random bits).
+    #[inline]
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

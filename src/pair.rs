@@ -4,6 +4,7 @@
 use crate::error::FieldError;
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
+use crate::trace::batch::RayJob;
 use crate::trace::{RayState, TargetPlane, Trace, TraceOptions, trace};
 use serde::{Deserialize, Serialize};
 
@@ -90,6 +91,16 @@ impl PointPair {
         TargetPlane {
             point: self.target(),
             normal: V3::new(d.x, 0.0, d.z).normalized(),
+        }
+    }
+
+    /// This pair's ray as a batch job, traced as [`PointPair::evaluate`]
+    /// traces it.
+    pub fn ray_job(&self) -> RayJob {
+        RayJob {
+            origin: self.origin(),
+            direction: self.direction(),
+            target: self.plane(),
         }
     }
 

@@ -12,7 +12,7 @@ use crate::math::Real;
 use crate::medium::{Field, Medium, Param};
 use crate::pair::PointPair;
 use crate::problem::Problem;
-use crate::trace::lanes::{BatchOptions, RayJob, trace_batch_into};
+use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
 use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{DualSVec64, DualStruct};
@@ -69,7 +69,7 @@ impl Objective {
         Objective {
             template: template.into(),
             free,
-            jobs: pairs.iter().map(RayJob::from_pair).collect(),
+            jobs: pairs.iter().map(PointPair::ray_job).collect(),
             pairs,
             options,
             residual_evaluations: AtomicU64::new(0),

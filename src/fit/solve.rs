@@ -6,6 +6,7 @@ use super::lm::{LevenbergMarquardt, LmState};
 use super::objective::Objective;
 use crate::error::Error;
 use crate::problem::{SolverMethod, SolverSettings};
+use crate::math::SplitMix64;
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     CostFunction, Error as ArgminError, Executor, IterState, Jacobian, KV, Operator, State,
@@ -330,16 +331,8 @@ pub fn starting_points(
     count: usize,
     seed: u64,
 ) -> Vec<Vec<f64>> {
-    let mut state = seed;
-    let mut uniform = move || {
-        // SplitMix64: tiny, seedable, and identical on every platform.
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix64(seed);
+    let mut uniform = move || rng.next_f64();
     (0..count)
         .map(|_| {
             x0.iter()

@@ -469,7 +469,7 @@ impl<T: Real> LogisticField<T> {
 }
 
 /// [`LogisticField<f64>`]'s compiled coefficients as plain numbers, for the
-/// SIMD tracer (`trace::lanes`), which evaluates the same formula lane-wise.
+/// SIMD tracer (`trace::batch`), which evaluates the same formula lane-wise.
 #[derive(Clone, Debug)]
 pub(crate) struct RawCoefficients {
     /// Background `[amp, 1/a]`.

@@ -47,6 +47,7 @@
 //! | `star_brightness` | multiplies the stars' flux | 1 |
 
 use super::sky::{Sky, SunDisc};
+use crate::math::splitmix64;
 use crate::scene::description::Sun;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -667,7 +668,7 @@ pub fn star_radius(pixel_angle: f64) -> f64 {
 /// (2 − tint)). A cell holds a star with probability 0.35.
 pub fn star_cell(face: u64, iu: u64, iv: u64) -> Option<[f64; 4]> {
     let seed = face << 40 | iu << 20 | iv;
-    let h = splitmix(seed);
+    let h = splitmix64(seed);
     let unit = |k: u32| ((h >> (16 * k)) & 0xffff) as f64 / 65535.0;
     if unit(0) > 0.35 {
         return None;
@@ -680,13 +681,6 @@ pub fn star_cell(face: u64, iu: u64, iv: u64) -> Option<[f64; 4]> {
 /// L_fade is this fraction of the sun's irradiance (the sky of late
 /// twilight).
 pub const STAR_FADE: f64 = 1e-7;
-
-fn splitmix(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
-}
 
 impl Sky for PhysicalSky {
     fn radiance(&self, dir: DVec3) -> [f64; 3] {

@@ -1080,6 +1080,7 @@ pub fn sphere_trace<F: DistanceField + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::SplitMix64;
     use proptest::prelude::*;
 
     // ---- helpers ---------------------------------------------------------
@@ -1091,15 +1092,11 @@ mod tests {
     /// Deterministic PRNG (SplitMix64) for the sampling checks.
     struct Rng(u64);
     impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
         fn uniform(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+            let mut g = SplitMix64(self.0);
+            let u = g.next_f64();
+            self.0 = g.0;
+            u
         }
         fn unit_vector(&mut self) -> DVec3 {
             loop {

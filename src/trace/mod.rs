@@ -8,20 +8,22 @@
 //! Everything is generic over [`Real`]: traced with dual numbers, the same code
 //! returns the exact derivative of the discrete endpoint map (see `fit`).
 
+pub mod batch;
+mod event;
 pub mod fastexp;
 pub mod hermite;
-pub mod lanes;
 pub mod state;
 mod stepper;
-pub mod stratified;
 
 pub use hermite::Segment;
 pub use state::{RayRate, RayState};
 pub use stepper::{Method, rk4_step};
 
+pub(crate) use event::first_ground_crossing;
+
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
-use hermite::bracketed_root;
+use event::{StepEnd, locate};
 use serde::Serialize;
 use stepper::{Attempt, Stepper};
 
@@ -238,62 +240,34 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
             p.push(real.y1);
         }
 
-        let plane_theta = target
-            .filter(|t| t.signed_distance(real.y1.x) >= 0.0)
-            .map(|t| {
-                bracketed_root(0.0, 1.0, |th| {
-                    let (x, dx) = real.position_and_slope(th);
-                    (t.signed_distance(x), dx.dot(t.normal))
-                })
-            });
-        let ground_theta = if real.y0.x.y >= 0.0 {
-            first_ground_crossing(&real)
-        } else {
-            None
-        };
-
-        match (plane_theta, ground_theta) {
-            (Some(tp), tg) => {
-                if tg.is_some_and(|tg| tg < tp) {
-                    occluded = true;
-                    if options.ground == GroundMode::Stop {
-                        return stop_at_ground(
-                            &seg,
-                            &real,
-                            tg.unwrap_or(0.0),
-                            occluded,
-                            stats,
-                            &finish,
-                        );
-                    }
-                }
-                let t = target.expect("a plane crossing implies a target");
-                let (endpoint, st) = locate(&seg, &real, tp, t.normal, t.point);
-                return finish(endpoint, st.v, st.s, End::Plane, occluded, stats);
-            }
-            (None, Some(tg)) => {
-                occluded = true;
-                if options.ground == GroundMode::Stop {
-                    return stop_at_ground(&seg, &real, tg, occluded, stats, &finish);
-                }
-            }
-            (None, None) => {}
-        }
-
         let d = plane_distance(y1.x).abs();
         if d < nearest.0 {
             nearest = (d, y1);
         }
-        if real.y1.s >= max_length {
-            let best = if target.is_some() { nearest.1 } else { y1 };
-            return finish(
-                best.x,
-                best.v.val(),
-                best.s.val(),
-                End::MaxLength,
-                occluded,
-                stats,
-            );
+        let events = event::decide_step(&real, target, options.ground, max_length);
+        occluded |= events.occluded;
+        match events.end {
+            Some(StepEnd::Plane(theta)) => {
+                let t = target.expect("a plane crossing implies a target");
+                let (endpoint, st) = locate(&seg, &real, theta, t.normal, t.point);
+                return finish(endpoint, st.v, st.s, End::Plane, occluded, stats);
+            }
+            Some(StepEnd::Ground(theta)) => {
+                let (endpoint, st) = locate(&seg, &real, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
+                return finish(endpoint, st.v, st.s, End::Ground, occluded, stats);
+            }
+            Some(StepEnd::MaxLength) => {
+                let best = if target.is_some() { nearest.1 } else { y1 };
+                return finish(
+                    best.x,
+                    best.v.val(),
+                    best.s.val(),
+                    End::MaxLength,
+                    occluded,
+                    stats,
+                );
+            }
+            None => {}
         }
         y = y1;
         f = f1;
@@ -306,70 +280,4 @@ fn real_state<T: Real>(y: &RayState<T>) -> RayState {
         v: y.v.val(),
         s: y.s.val(),
     }
-}
-
-/// The first θ ∈ [0, 1] where the step goes below y = 0, given y ≥ 0 at its start.
-/// Shared by every tracer (scalar, lanes, stratified), so they flag the same rays.
-pub(crate) fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
-    let height = |th: f64| {
-        let (x, dx) = seg.position_and_slope(th);
-        (x.y, dx.y)
-    };
-    if seg.y1.x.y < 0.0 {
-        return Some(bracketed_root(0.0, 1.0, height));
-    }
-    // Both ends above ground: the step can still dip below it if it turns from
-    // descending to rising inside (a mirage ray's lowest point).
-    if seg.f0.dx.y < 0.0 && seg.f1.dx.y > 0.0 {
-        let slope = |th: f64| {
-            let (_, dx) = seg.position_and_slope(th);
-            // d²x/dθ² by a central difference of the analytic slope: only the
-            // sign pattern matters for bracketing the minimum.
-            let e = 1e-6;
-            let (_, dxp) = seg.position_and_slope((th + e).min(1.0));
-            let (_, dxm) = seg.position_and_slope((th - e).max(0.0));
-            (
-                dx.y,
-                (dxp.y - dxm.y) / ((th + e).min(1.0) - (th - e).max(0.0)),
-            )
-        };
-        let lowest = bracketed_root(0.0, 1.0, slope);
-        if seg.position(lowest).y < 0.0 {
-            return Some(bracketed_root(0.0, lowest, height));
-        }
-    }
-    None
-}
-
-/// The point where the step meets the plane through `point` with `normal`,
-/// found at θ on the real trajectory and refined by one Newton step in `T`, so
-/// that dual parts carry the implicit derivative dθ = −∂g/∂p / ∂g/∂θ.
-pub(crate) fn locate<T: Real>(
-    seg: &Segment<T>,
-    real: &Segment<f64>,
-    theta: f64,
-    normal: V3,
-    point: V3,
-) -> (V3<T>, RayState) {
-    let (_, slope) = real.position_and_slope(theta);
-    let slope = slope.dot(normal);
-    let g = (seg.position(T::cst(theta)) - point.lift()).dot(normal.lift());
-    let theta_t = if slope != 0.0 && slope.is_finite() {
-        T::cst(theta) - g * (1.0 / slope)
-    } else {
-        T::cst(theta)
-    };
-    (seg.position(theta_t), real.state(theta))
-}
-
-fn stop_at_ground<T: Real>(
-    seg: &Segment<T>,
-    real: &Segment<f64>,
-    theta: f64,
-    occluded: bool,
-    stats: Stats,
-    finish: &impl Fn(V3<T>, V3, f64, End, bool, Stats) -> Trace<T>,
-) -> Trace<T> {
-    let (endpoint, st) = locate(seg, real, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
-    finish(endpoint, st.v, st.s, End::Ground, occluded, stats)
 }

@@ -15,24 +15,26 @@
 //!
 //! The state maps back to 3-D as `v = (v_x, v_y, v_z)`, `dv/dτ = (0, a_y, 0)`.
 //! Events are the 3-D ones, evaluated on the mapped step by the same scalar
-//! code (see [`lanes`](super::lanes)): the plane crossing (along the ray's
+//! code (see [`batch`](super)): the plane crossing (along the ray's
 //! azimuth), the ground (dips between steps included), the maximum length and
 //! the step limit.
 //!
-//! Call it through [`lanes::trace_batch`](super::lanes::trace_batch), which
+//! Call it through [`trace_batch`](super::trace_batch), which
 //! takes this path whenever the field allows it, or directly with
 //! [`trace_batch_2d`].
 
 // Lane loops index several arrays in lockstep (see `lanes.rs`).
 #![allow(clippy::needless_range_loop)]
 
-use super::fastexp::fmadd;
-use super::lanes::{
-    BatchOptions, CROSSING_MARGIN, Coefficients, Isa, Kernel, LANES, RayJob, combine, run,
-};
-use super::{RayRate, RayState, Segment, Trace};
+use super::driver::Kernel;
+use super::isa::{Isa, run};
+use super::job::{BatchOptions, RayJob};
+use super::lanes::{LANES, LaneBuf, LaneSet, combine};
+use super::terms::Coefficients;
 use crate::math::V3;
 use crate::medium::{IndexField, LogisticField};
+use crate::trace::fastexp::fmadd;
+use crate::trace::{RayRate, RayState, Segment, Trace};
 
 /// The field has hot spots, so δ depends on x and z too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
@@ -55,7 +57,7 @@ pub fn trace_batch_2d(
         return Err(NotStratified);
     }
     let c = Coefficients::of(field);
-    // Half-width lanes for small batches, as in `lanes::trace_batch_3d`.
+    // Half-width lanes for small batches, as in `trace_batch_3d`.
     if jobs.len() <= LANES / 2 {
         run(
             isa,
@@ -109,41 +111,44 @@ impl<const N: usize> Buf2<N> {
     }
 }
 
-/// The 2-D lane kernel.
+impl<const N: usize> LaneBuf<N, 5> for Buf2<N> {
+    fn put(&mut self, lane: usize, start: &RayState, rate: &RayRate) {
+        self.x[lane] = start.x.x;
+        self.y[lane] = start.x.y;
+        self.z[lane] = start.x.z;
+        self.vy[lane] = start.v.y;
+        self.s[lane] = start.s;
+        self.ay[lane] = rate.dv.y;
+        self.n[lane] = rate.ds;
+    }
+
+    #[inline(always)]
+    fn tracked(&self) -> [&[f64; N]; 5] {
+        self.screened()
+    }
+
+    #[inline(always)]
+    fn screened(&self) -> [&[f64; N]; 5] {
+        [&self.x, &self.y, &self.z, &self.vy, &self.s]
+    }
+}
+
+/// The 2-D lane kernel; the nearest point keeps (x, y, z, v_y, s).
 struct Lanes2<const N: usize> {
     c: Coefficients,
-    buf: [Buf2<N>; 2],
-    /// The stages k2, k3, k4 of a step.
-    stages: [Buf2<N>; 3],
-    /// Index of the buffer with the current state (the other: the previous).
-    cur: usize,
-    h: [f64; N],
+    set: LaneSet<Buf2<N>, N, 5>,
     /// v_x and v_z, constant along each ray.
     vx: [f64; N],
     vz: [f64; N],
-    /// Target plane: point and normal.
-    plane: [[f64; N]; 6],
-    max_length: [f64; N],
-    /// Distance to the plane of the nearest point so far, and its
-    /// (x, y, z, v_y, s).
-    near_d: [f64; N],
-    near: [[f64; N]; 5],
 }
 
 impl<const N: usize> Lanes2<N> {
     fn new(c: Coefficients) -> Self {
         Lanes2 {
             c,
-            buf: [Buf2::ZERO; 2],
-            stages: [Buf2::ZERO; 3],
-            cur: 0,
-            h: [0.0; N],
+            set: LaneSet::new(Buf2::ZERO),
             vx: [0.0; N],
             vz: [0.0; N],
-            plane: [[0.0; N]; 6],
-            max_length: [f64::INFINITY; N],
-            near_d: [f64::INFINITY; N],
-            near: [[0.0; N]; 5],
         }
     }
 
@@ -165,15 +170,6 @@ impl<const N: usize> Lanes2<N> {
             },
         )
     }
-
-    fn buffer_state(&self, b: usize, lane: usize) -> (RayState, RayRate) {
-        let q = &self.buf[b];
-        self.lift(
-            lane,
-            [q.x[lane], q.y[lane], q.z[lane], q.vy[lane], q.s[lane]],
-            [q.ay[lane], q.n[lane]],
-        )
-    }
 }
 
 impl<const N: usize> Kernel<N> for Lanes2<N> {
@@ -188,87 +184,41 @@ impl<const N: usize> Kernel<N> for Lanes2<N> {
     ) {
         self.vx[lane] = start.v.x;
         self.vz[lane] = start.v.z;
-        let t = &job.target;
-        let plane = [
-            t.point.x, t.point.y, t.point.z, t.normal.x, t.normal.y, t.normal.z,
-        ];
-        for (p, v) in self.plane.iter_mut().zip(plane) {
-            p[lane] = v;
-        }
-        let b = &mut self.buf[self.cur];
-        let q = [start.x.x, start.x.y, start.x.z, start.v.y, start.s];
-        for (k, (dst, v)) in [&mut b.x, &mut b.y, &mut b.z, &mut b.vy, &mut b.s]
-            .into_iter()
-            .zip(q)
-            .enumerate()
-        {
-            dst[lane] = v;
-            self.near[k][lane] = v;
-        }
-        b.ay[lane] = rate.dv.y;
-        b.n[lane] = rate.ds;
-        self.h[lane] = step;
-        self.max_length[lane] = max_length;
-        self.near_d[lane] = t.signed_distance(start.x).abs();
+        self.set.load(lane, job, start, rate, step, max_length);
     }
 
     fn freeze(&mut self, lane: usize) {
-        self.h[lane] = 0.0;
-        self.max_length[lane] = f64::INFINITY;
+        self.set.freeze(lane);
     }
 
     #[inline(always)]
     fn step<const FMA: bool>(&mut self) {
-        let (first, second) = self.buf.split_at_mut(1);
-        let (y0, y1) = if self.cur == 0 {
-            (&first[0], &mut second[0])
-        } else {
-            (&second[0], &mut first[0])
-        };
-        rk4_2d::<N, FMA>(
-            &self.c,
-            &self.h,
-            [&self.vx, &self.vz],
-            y0,
-            &mut self.stages,
-            y1,
-        );
-        self.cur ^= 1;
+        let (h, y0, stages, y1) = self.set.step_parts();
+        rk4_2d::<N, FMA>(&self.c, h, [&self.vx, &self.vz], y0, stages, y1);
+        self.set.flip();
     }
 
     #[inline(always)]
     fn scan(&mut self) -> u64 {
-        let y0 = &self.buf[self.cur ^ 1];
-        let y1 = &self.buf[self.cur];
-        scan_2d(
-            y0,
-            y1,
-            &self.plane,
-            &self.max_length,
-            &mut self.near_d,
-            &mut self.near,
-        )
+        self.set.scan()
     }
 
     fn segment(&self, lane: usize) -> Segment<f64> {
-        let (y0, f0) = self.buffer_state(self.cur ^ 1, lane);
-        let (y1, f1) = self.buffer_state(self.cur, lane);
-        Segment {
-            y0,
-            f0,
-            y1,
-            f1,
-            h: self.h[lane],
-        }
+        self.set.segment(lane, |q, i| {
+            self.lift(
+                i,
+                [q.x[i], q.y[i], q.z[i], q.vy[i], q.s[i]],
+                [q.ay[i], q.n[i]],
+            )
+        })
     }
 
     fn nearest(&self, lane: usize) -> RayState {
-        let q = [0, 1, 2, 3, 4].map(|k| self.near[k][lane]);
-        self.lift(lane, q, [0.0, 1.0]).0
+        self.lift(lane, self.set.nearest(lane), [0.0, 1.0]).0
     }
 }
 
-/// One RK4 step of every lane from `y0` into `y1` (see `rk4_3d` in `lanes.rs`
+/// One RK4 step of every lane from `y0` into `y1` (see `rk4_3d` in `kernel.rs`
 /// for why this is a free function on distinct references).
 #[inline(always)]
 fn rk4_2d<const N: usize, const FMA: bool>(
@@ -310,34 +260,4 @@ fn rk4_2d<const N: usize, const FMA: bool>(
         y1.s[i] = combine::<FMA>(y0.s[i], [y0.n[i], k2.n[i], k3.n[i], k4.n[i]], b);
     }
     y1.set_rate::<FMA>(c);
-}
-
-/// The event screen of the 2-D kernel (see `Kernel::scan`).
-#[inline(always)]
-fn scan_2d<const N: usize>(
-    y0: &Buf2<N>,
-    y1: &Buf2<N>,
-    plane: &[[f64; N]; 6],
-    max_length: &[f64; N],
-    near_d: &mut [f64; N],
-    near: &mut [[f64; N]; 5],
-) -> u64 {
-    let [px, py, pz, nx, ny, nz] = plane;
-    let mut mask = 0u64;
-    for i in 0..N {
-        // `TargetPlane::signed_distance`, operation for operation.
-        let g = (y1.x[i] - px[i]) * nx[i] + (y1.y[i] - py[i]) * ny[i] + (y1.z[i] - pz[i]) * nz[i];
-        let d = g.abs();
-        let closer = d < near_d[i];
-        near_d[i] = if closer { d } else { near_d[i] };
-        let now = [y1.x[i], y1.y[i], y1.z[i], y1.vy[i], y1.s[i]];
-        for (k, v) in now.into_iter().enumerate() {
-            near[k][i] = if closer { v } else { near[k][i] };
-        }
-        let crossed = g >= -CROSSING_MARGIN;
-        let ground = (y0.y[i] >= 0.0) & ((y1.y[i] < 0.0) | ((y0.vy[i] < 0.0) & (y1.vy[i] > 0.0)));
-        let long = y1.s[i] >= max_length[i];
-        mask |= u64::from(crossed | ground | long) << i;
-    }
-    mask
 }

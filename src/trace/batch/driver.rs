@@ -1,0 +1,217 @@
+//! The batch loop: lanes take jobs in order, step together, and the rays whose
+//! step may hold an event are resolved one by one by the scalar tracer's code
+//! ([`decide_step`]); a lane whose ray is done takes the next job, and when
+//! none is left it is frozen (step 0). Nothing is allocated per step.
+
+use super::job::{BatchOptions, RayJob};
+use crate::math::V3;
+use crate::medium::{IndexField, LogisticField};
+use crate::trace::event::{StepEnd, decide_step, locate};
+use crate::trace::{End, RayRate, RayState, Segment, Stats, Trace, state};
+
+/// A trace that the driver overwrites (slots of the output before tracing).
+pub(crate) fn placeholder() -> Trace {
+    Trace {
+        endpoint: V3::new(f64::NAN, f64::NAN, f64::NAN),
+        direction: V3::ZERO,
+        arc_length: f64::NAN,
+        end: End::StepLimit,
+        occluded: false,
+        unreachable: true,
+        stats: Stats::default(),
+    }
+}
+
+/// A lane kernel: the state of `N` rays (at most [`LANES`](super::LANES)) and
+/// one RK4 step over all of them. The driver ([`drive`]) owns the jobs and the
+/// event logic.
+pub(crate) trait Kernel<const N: usize> {
+    /// Puts a ray into `lane`: its start state and rate (evaluated by the
+    /// scalar field, exactly as the scalar tracer starts), step and limits.
+    fn load(
+        &mut self,
+        lane: usize,
+        job: &RayJob,
+        start: &RayState,
+        rate: &RayRate,
+        step: f64,
+        max_length: f64,
+    );
+    /// Stops `lane` from moving (its step becomes 0).
+    fn freeze(&mut self, lane: usize);
+    /// One RK4 step of every lane; the previous state stays readable.
+    fn step<const FMA: bool>(&mut self);
+    /// After a step: updates each lane's nearest point to its plane and returns
+    /// the lanes whose step may hold an event (plane crossing, ground, maximum
+    /// length), as a bit mask. May report more lanes, never fewer.
+    fn scan(&mut self) -> u64;
+    /// The last step of `lane`, in 3-D.
+    fn segment(&self, lane: usize) -> Segment<f64>;
+    /// The traced point of `lane` nearest its plane so far.
+    fn nearest(&self, lane: usize) -> RayState;
+}
+
+/// Bookkeeping of the ray in one lane.
+#[derive(Clone, Copy)]
+struct Slot {
+    job: usize,
+    /// Global step count when the ray was loaded.
+    start: u64,
+    occluded: bool,
+    max_length: f64,
+}
+
+/// The batch loop, inlined into each instruction-set build so that the kernel's
+/// step is compiled for that set.
+#[inline(always)]
+pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
+    kernel: &mut K,
+    field: &LogisticField,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) {
+    let mut slots = [Slot {
+        job: 0,
+        start: 0,
+        occluded: false,
+        max_length: 0.0,
+    }; N];
+    let mut next = 0;
+    let mut live = 0u64;
+    let mut global = 0u64;
+    for lane in 0..N {
+        refill(
+            kernel, lane, field, jobs, options, out, &mut next, &mut slots, &mut live, global,
+        );
+    }
+    while live != 0 {
+        kernel.step::<FMA>();
+        global += 1;
+        let mut events = kernel.scan() & live;
+        // Every live ray started at or after slot.start, so only a ray loaded
+        // max_steps ago can hit the limit now.
+        if let Some(first) = global.checked_sub(options.max_steps) {
+            for (lane, slot) in slots.iter().enumerate() {
+                if live >> lane & 1 == 1 && slot.start <= first {
+                    events |= 1 << lane;
+                }
+            }
+        }
+        while events != 0 {
+            let lane = events.trailing_zeros() as usize;
+            events &= events - 1;
+            let slot = &mut slots[lane];
+            let steps = global - slot.start;
+            let job = &jobs[slot.job];
+            let seg = kernel.segment(lane);
+            if let Some(t) = after_step(&seg, job, slot, options, steps, || kernel.nearest(lane)) {
+                out[slot.job] = t;
+                refill(
+                    kernel, lane, field, jobs, options, out, &mut next, &mut slots, &mut live,
+                    global,
+                );
+            }
+        }
+    }
+}
+
+/// Loads the next job into `lane`, or freezes the lane when none is left.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn refill<K: Kernel<N>, const N: usize>(
+    kernel: &mut K,
+    lane: usize,
+    field: &LogisticField,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+    next: &mut usize,
+    slots: &mut [Slot; N],
+    live: &mut u64,
+    global: u64,
+) {
+    while *next < jobs.len() {
+        let j = *next;
+        *next += 1;
+        let job = &jobs[j];
+        // The start state exactly as the scalar tracer computes it.
+        let (delta0, _) = field.delta_gradient(job.origin);
+        let y = RayState {
+            x: job.origin,
+            v: job.direction * (delta0 + 1.0),
+            s: 0.0,
+        };
+        let mut evaluations = 0;
+        let f = state::rate(field, &y, &mut evaluations);
+        let max_length = options
+            .max_length
+            .unwrap_or(4.0 * (job.target.point - job.origin).norm());
+        let occluded = job.origin.y < 0.0;
+        if options.max_steps == 0 {
+            out[j] = finished(y.x, y.v, y.s, End::StepLimit, occluded, 0);
+            continue;
+        }
+        kernel.load(lane, job, &y, &f, options.step, max_length);
+        slots[lane] = Slot {
+            job: j,
+            start: global,
+            occluded,
+            max_length,
+        };
+        *live |= 1 << lane;
+        return;
+    }
+    kernel.freeze(lane);
+    *live &= !(1 << lane);
+}
+
+/// The scalar tracer's logic after one accepted step (the events of
+/// [`decide_step`], then the step limit, as `trace` checks them): the
+/// finished trace if the ray ends in this step.
+fn after_step(
+    seg: &Segment<f64>,
+    job: &RayJob,
+    slot: &mut Slot,
+    options: &BatchOptions,
+    steps: u64,
+    nearest: impl FnOnce() -> RayState,
+) -> Option<Trace> {
+    let t = &job.target;
+    let events = decide_step(seg, Some(t), options.ground, slot.max_length);
+    slot.occluded |= events.occluded;
+    let end = match events.end {
+        Some(StepEnd::Plane(theta)) => {
+            let (e, st) = locate(seg, seg, theta, t.normal, t.point);
+            return Some(finished(e, st.v, st.s, End::Plane, slot.occluded, steps));
+        }
+        Some(StepEnd::Ground(theta)) => {
+            let (e, st) = locate(seg, seg, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
+            return Some(finished(e, st.v, st.s, End::Ground, slot.occluded, steps));
+        }
+        Some(StepEnd::MaxLength) => End::MaxLength,
+        None if steps >= options.max_steps => End::StepLimit,
+        None => return None,
+    };
+    let best = nearest();
+    Some(finished(best.x, best.v, best.s, end, slot.occluded, steps))
+}
+
+/// A finished trace (a target plane is always given, so any other end than the
+/// plane makes the ray unreachable).
+fn finished(endpoint: V3, v: V3, s: f64, end: End, occluded: bool, steps: u64) -> Trace {
+    Trace {
+        endpoint,
+        direction: v.normalized(),
+        arc_length: s,
+        end,
+        occluded,
+        unreachable: end != End::Plane,
+        stats: Stats {
+            // The start rate, then four new evaluations per RK4 step.
+            rhs_evaluations: 1 + 4 * steps,
+            accepted_steps: steps,
+            rejected_steps: 0,
+        },
+    }
+}

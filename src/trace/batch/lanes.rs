@@ -1,0 +1,219 @@
+//! What the 3-D and 2-D lane kernels share: the lane count, the double buffer
+//! of lane states with its RK4 stages, the per-lane target plane and limits,
+//! the nearest-point tracking and the vector event screen. A kernel supplies
+//! its state buffer ([`LaneBuf`]) and its RK4 step; everything else is here.
+
+// Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
+// arrays is the form the compiler vectorizes.
+#![allow(clippy::needless_range_loop)]
+
+use super::job::RayJob;
+use crate::trace::fastexp::fmadd;
+use crate::trace::{RayRate, RayState, Segment};
+
+/// Rays traced side by side: two AVX-512 (four AVX2) registers per
+/// operation. Measured faster than 8 (too few independent chains to hide the
+/// latency of the polynomial's dependent multiply–adds) and than 32 (register
+/// spills). Batches of at most `LANES / 2` rays run an 8-lane build instead,
+/// which leaves no idle half to compute.
+pub const LANES: usize = 16;
+const _: () = assert!(LANES <= 64, "lane masks are u64");
+
+/// Screening margin (metres) for the plane-crossing test of the vector scan:
+/// the exact test runs afterwards in scalar code, so the screen only needs to
+/// let through every step that the exact test could accept.
+pub(crate) const CROSSING_MARGIN: f64 = 1e-6;
+
+/// RK4's final sum `y + h/6·k1 + h/3·k2 + h/3·k3 + h/6·k4` for one component,
+/// added in the scalar `RayState::advanced`'s order; `b` holds the four
+/// weights times h.
+#[inline(always)]
+pub(crate) fn combine<const FMA: bool>(y: f64, k: [f64; 4], b: [f64; 4]) -> f64 {
+    let y = fmadd::<FMA>(k[0], b[0], y);
+    let y = fmadd::<FMA>(k[1], b[1], y);
+    let y = fmadd::<FMA>(k[2], b[2], y);
+    fmadd::<FMA>(k[3], b[3], y)
+}
+
+/// One buffer of `N` lane states, as a kernel lays it out; `M` is the number
+/// of components kept for the nearest point.
+pub(crate) trait LaneBuf<const N: usize, const M: usize>: Copy {
+    /// Writes a ray's start state and rate into `lane`.
+    fn put(&mut self, lane: usize, start: &RayState, rate: &RayRate);
+    /// The components the nearest point keeps, enough to rebuild its state.
+    fn tracked(&self) -> [&[f64; N]; M];
+    /// The components the event screen reads: x, y, z, v_y, s.
+    fn screened(&self) -> [&[f64; N]; 5];
+}
+
+/// The lane state of a kernel over buffers `B`: the current and previous
+/// states, the stages of a step, and each lane's step, plane, limit and
+/// nearest point so far.
+pub(crate) struct LaneSet<B, const N: usize, const M: usize> {
+    buf: [B; 2],
+    /// The stages k2, k3, k4 of a step (kept here, not re-initialised on the
+    /// stack every step).
+    stages: [B; 3],
+    /// Index of the buffer with the current state; the other holds the
+    /// previous one (the start of the last step).
+    cur: usize,
+    h: [f64; N],
+    /// Target plane: point and normal.
+    plane: [[f64; N]; 6],
+    max_length: [f64; N],
+    /// Distance to the plane of the nearest point so far, and that point's
+    /// tracked components.
+    near_d: [f64; N],
+    near: [[f64; N]; M],
+}
+
+impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
+    /// Every lane idle, its buffers `zero` (a state harmless to step).
+    pub(crate) fn new(zero: B) -> Self {
+        LaneSet {
+            buf: [zero; 2],
+            stages: [zero; 3],
+            cur: 0,
+            h: [0.0; N],
+            plane: [[0.0; N]; 6],
+            max_length: [f64::INFINITY; N],
+            near_d: [f64::INFINITY; N],
+            near: [[0.0; N]; M],
+        }
+    }
+
+    /// Puts a ray into `lane` (see `Kernel::load`).
+    pub(crate) fn load(
+        &mut self,
+        lane: usize,
+        job: &RayJob,
+        start: &RayState,
+        rate: &RayRate,
+        step: f64,
+        max_length: f64,
+    ) {
+        let b = &mut self.buf[self.cur];
+        b.put(lane, start, rate);
+        for (near, v) in self.near.iter_mut().zip(b.tracked()) {
+            near[lane] = v[lane];
+        }
+        self.h[lane] = step;
+        let t = &job.target;
+        let plane = [
+            t.point.x, t.point.y, t.point.z, t.normal.x, t.normal.y, t.normal.z,
+        ];
+        for (p, v) in self.plane.iter_mut().zip(plane) {
+            p[lane] = v;
+        }
+        self.max_length[lane] = max_length;
+        self.near_d[lane] = t.signed_distance(start.x).abs();
+    }
+
+    /// Stops `lane` from moving (its step becomes 0, and it never reaches
+    /// its maximum length).
+    pub(crate) fn freeze(&mut self, lane: usize) {
+        self.h[lane] = 0.0;
+        self.max_length[lane] = f64::INFINITY;
+    }
+
+    /// The parts of a step of every lane: the steps h, the current state
+    /// `y0`, the stages and the buffer `y1` for the new state; [`Self::flip`]
+    /// then makes `y1` current and `y0` the previous state. They are distinct
+    /// references, so that the compiler knows they do not overlap and
+    /// vectorizes each lane loop (through `self` it could not tell `y0` from
+    /// `y1`, two elements of one array). Not a closure: a closure is compiled
+    /// without the caller's target features, and its fused multiply–adds
+    /// would become calls to the software `fma`.
+    #[inline(always)]
+    pub(crate) fn step_parts(&mut self) -> (&[f64; N], &B, &mut [B; 3], &mut B) {
+        let (first, second) = self.buf.split_at_mut(1);
+        let (y0, y1) = if self.cur == 0 {
+            (&first[0], &mut second[0])
+        } else {
+            (&second[0], &mut first[0])
+        };
+        (&self.h, y0, &mut self.stages, y1)
+    }
+
+    /// After a step written by [`Self::step_parts`]: the new state becomes
+    /// the current one.
+    #[inline(always)]
+    pub(crate) fn flip(&mut self) {
+        self.cur ^= 1;
+    }
+
+    /// The event screen after a step (see `Kernel::scan`).
+    #[inline(always)]
+    pub(crate) fn scan(&mut self) -> u64 {
+        let y0 = &self.buf[self.cur ^ 1];
+        let y1 = &self.buf[self.cur];
+        scan(
+            y0.screened(),
+            y1.screened(),
+            y1.tracked(),
+            &self.plane,
+            &self.max_length,
+            &mut self.near_d,
+            &mut self.near,
+        )
+    }
+
+    /// The last step of `lane`, with `state` reading a lane's 3-D state and
+    /// rate from a buffer.
+    pub(crate) fn segment(
+        &self,
+        lane: usize,
+        state: impl Fn(&B, usize) -> (RayState, RayRate),
+    ) -> Segment<f64> {
+        let (y0, f0) = state(&self.buf[self.cur ^ 1], lane);
+        let (y1, f1) = state(&self.buf[self.cur], lane);
+        Segment {
+            y0,
+            f0,
+            y1,
+            f1,
+            h: self.h[lane],
+        }
+    }
+
+    /// The tracked components of the point of `lane` nearest its plane so far.
+    pub(crate) fn nearest(&self, lane: usize) -> [f64; M] {
+        std::array::from_fn(|k| self.near[k][lane])
+    }
+}
+
+/// The event screen on distinct references (see [`LaneSet::step_parts`] for
+/// why):
+/// updates the nearest points from `now` and returns the lanes whose step
+/// from `y0` to `y1` (each x, y, z, v_y, s) may cross the plane, go below
+/// the ground, or reach the maximum length.
+#[inline(always)]
+fn scan<const N: usize, const M: usize>(
+    y0: [&[f64; N]; 5],
+    y1: [&[f64; N]; 5],
+    now: [&[f64; N]; M],
+    plane: &[[f64; N]; 6],
+    max_length: &[f64; N],
+    near_d: &mut [f64; N],
+    near: &mut [[f64; N]; M],
+) -> u64 {
+    let [px, py, pz, nx, ny, nz] = plane;
+    let [_, y0y, _, y0vy, _] = y0;
+    let [x, y, z, vy, s] = y1;
+    let mut mask = 0u64;
+    for i in 0..N {
+        // `TargetPlane::signed_distance`, operation for operation.
+        let g = (x[i] - px[i]) * nx[i] + (y[i] - py[i]) * ny[i] + (z[i] - pz[i]) * nz[i];
+        let d = g.abs();
+        let closer = d < near_d[i];
+        near_d[i] = if closer { d } else { near_d[i] };
+        for k in 0..M {
+            near[k][i] = if closer { now[k][i] } else { near[k][i] };
+        }
+        let crossed = g >= -CROSSING_MARGIN;
+        let ground = (y0y[i] >= 0.0) & ((y[i] < 0.0) | ((y0vy[i] < 0.0) & (vy[i] > 0.0)));
+        let long = s[i] >= max_length[i];
+        mask |= u64::from(crossed | ground | long) << i;
+    }
+    mask
+}

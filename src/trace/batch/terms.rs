@@ -1,0 +1,199 @@
+//! The medium's right-hand-side terms, lane-wise: δ and ∇δ of a compiled
+//! [`LogisticField`] at every lane's position, with the operations of
+//! `LogisticField::delta_gradient` in its order and the polynomial
+//! exponential inlined, so that each term loop compiles to SIMD code.
+
+// Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
+// arrays is the form the compiler vectorizes.
+#![allow(clippy::needless_range_loop)]
+
+use crate::medium::LogisticField;
+use crate::trace::fastexp::{fmadd, sigmoid};
+
+/// The compiled field as plain numbers (see `LogisticField::coefficients`).
+#[derive(Clone, Debug)]
+pub(crate) struct Coefficients {
+    /// Background `[amp, 1/a]`.
+    pub background: Option<[f64; 2]>,
+    /// Inversion `[amp, 1/a, height]`.
+    pub inversion: Option<[f64; 3]>,
+    /// Hot spots `[amp, 1/a, x, z, radius, edge]`.
+    pub hotspots: Vec<[f64; 6]>,
+}
+
+impl Coefficients {
+    pub(crate) fn of(field: &LogisticField) -> Self {
+        let raw = field.coefficients();
+        Coefficients {
+            background: raw.background,
+            inversion: raw.inversion,
+            hotspots: raw.hotspots,
+        }
+    }
+
+    /// Adds the stratified terms' δ and dδ/dy at heights `y` to `d` and `gy`,
+    /// with the operations of `LogisticField::delta_gradient` in its order.
+    #[inline(always)]
+    pub(crate) fn layers<const N: usize, const FMA: bool>(
+        &self,
+        y: &[f64; N],
+        d: &mut [f64; N],
+        gy: &mut [f64; N],
+    ) {
+        // Each combination of terms gets its own loop (the const parameters),
+        // so no lane loop tests for absent terms.
+        match (self.background, self.inversion) {
+            (Some(bg), Some(inv)) => layer_loop::<N, FMA, true, true>(bg, inv, y, d, gy),
+            (Some(bg), None) => layer_loop::<N, FMA, true, false>(bg, [0.0; 3], y, d, gy),
+            (None, Some(inv)) => layer_loop::<N, FMA, false, true>([0.0; 2], inv, y, d, gy),
+            (None, None) => {}
+        }
+    }
+
+    /// δ and ∇δ at the lanes' positions, the whole field with hot spots,
+    /// accumulated into `d` and `g` (which the caller zeroes).
+    #[inline(always)]
+    pub(crate) fn delta_gradient<const N: usize, const FMA: bool>(
+        &self,
+        p: [&[f64; N]; 3],
+        d: &mut [f64; N],
+        g: [&mut [f64; N]; 3],
+    ) {
+        match (self.background, self.inversion) {
+            (Some(bg), Some(inv)) => self.full::<N, FMA, true, true>(bg, inv, p, d, g),
+            (Some(bg), None) => self.full::<N, FMA, true, false>(bg, [0.0; 3], p, d, g),
+            (None, Some(inv)) => self.full::<N, FMA, false, true>([0.0; 2], inv, p, d, g),
+            (None, None) => self.full::<N, FMA, false, false>([0.0; 2], [0.0; 3], p, d, g),
+        }
+    }
+
+    /// [`Self::delta_gradient`] for one combination of layers. The layers
+    /// share a lane loop with the first hot spot, and further hot spots go two
+    /// to a loop: several independent exponentials per lane keep enough
+    /// multiply–add chains in flight to hide their latency. Terms are still
+    /// added in the scalar code's order.
+    #[inline(always)]
+    fn full<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
+        &self,
+        bg: [f64; 2],
+        inv: [f64; 3],
+        [x, y, z]: [&[f64; N]; 3],
+        d: &mut [f64; N],
+        [gx, gy, gz]: [&mut [f64; N]; 3],
+    ) {
+        let Some((first, rest)) = self.hotspots.split_first() else {
+            if BG || INV {
+                layer_loop::<N, FMA, BG, INV>(bg, inv, y, d, gy);
+            }
+            return;
+        };
+        for i in 0..N {
+            let (di, gyi) = layer_point::<FMA, BG, INV>(bg, inv, y[i], d[i], gy[i]);
+            let acc = hot_point::<FMA>(*first, x[i], y[i], z[i], [di, gx[i], gyi, gz[i]]);
+            [d[i], gx[i], gy[i], gz[i]] = acc;
+        }
+        for pair in rest.chunks(2) {
+            match *pair {
+                [h0, h1] => {
+                    for i in 0..N {
+                        let acc = [d[i], gx[i], gy[i], gz[i]];
+                        let acc = hot_point::<FMA>(h0, x[i], y[i], z[i], acc);
+                        let acc = hot_point::<FMA>(h1, x[i], y[i], z[i], acc);
+                        [d[i], gx[i], gy[i], gz[i]] = acc;
+                    }
+                }
+                [h0] => {
+                    for i in 0..N {
+                        let acc = [d[i], gx[i], gy[i], gz[i]];
+                        [d[i], gx[i], gy[i], gz[i]] = hot_point::<FMA>(h0, x[i], y[i], z[i], acc);
+                    }
+                }
+                _ => unreachable!("chunks of at most two"),
+            }
+        }
+    }
+}
+
+/// The layers' loop over lanes: adds the background (if `BG`) and the
+/// inversion (if `INV`) to `d` and `gy`.
+#[inline(always)]
+fn layer_loop<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
+    bg: [f64; 2],
+    inv: [f64; 3],
+    y: &[f64; N],
+    d: &mut [f64; N],
+    gy: &mut [f64; N],
+) {
+    for i in 0..N {
+        (d[i], gy[i]) = layer_point::<FMA, BG, INV>(bg, inv, y[i], d[i], gy[i]);
+    }
+}
+
+/// `d` and `gy` plus the layers' terms at height y, in the scalar order.
+#[inline(always)]
+fn layer_point<const FMA: bool, const BG: bool, const INV: bool>(
+    bg: [f64; 2],
+    inv: [f64; 3],
+    y: f64,
+    mut d: f64,
+    mut gy: f64,
+) -> (f64, f64) {
+    if BG {
+        let (db, gb) = background_term::<FMA>(bg, y);
+        d += db;
+        gy += gb;
+    }
+    if INV {
+        let (di, gi) = inversion_term::<FMA>(inv, y);
+        d += di;
+        gy -= gi;
+    }
+    (d, gy)
+}
+
+/// (δ, ∂δ/∂x, ∂δ/∂y, ∂δ/∂z) plus one hot spot's terms at (x, y, z), with the
+/// operations of `LogisticField::delta_gradient`.
+#[inline(always)]
+fn hot_point<const FMA: bool>(
+    [amp, inv_rate, hx, hz, radius, edge]: [f64; 6],
+    x: f64,
+    y: f64,
+    z: f64,
+    [d, gx, gy, gz]: [f64; 4],
+) -> [f64; 4] {
+    let dx = x - hx;
+    let dz = z - hz;
+    // ρ without the scalar code's rescaling: an overflow to ∞ for
+    // |dx| > 10¹⁵⁴ still gives w = 0 and a zero gradient, not NaN.
+    let rho = fmadd::<FMA>(dx, dx, dz * dz).sqrt();
+    let (w, dw) = sigmoid::<FMA>(edge * (radius - rho));
+    let dw_drho = -(edge * dw);
+    // At the cone tip (ρ = 0) the horizontal derivative is 0; so it is where
+    // dx² + dz² underflows (within 10⁻¹⁶² m of the centre), where ρ = 0 too
+    // and dx/ρ would blow up.
+    let inv_rho = if rho > 0.0 { 1.0 / rho } else { 0.0 };
+    let ux = dx * inv_rho;
+    let uz = dz * inv_rho;
+    let (s, ds) = sigmoid::<FMA>(y * inv_rate);
+    let amp_s = amp * s;
+    [
+        d + amp_s * w,
+        gx + amp_s * dw_drho * ux,
+        gy + amp * w * ds * inv_rate,
+        gz + amp_s * dw_drho * uz,
+    ]
+}
+
+/// The background's (δ, dδ/dy) at height y.
+#[inline(always)]
+fn background_term<const FMA: bool>([amp, inv_rate]: [f64; 2], y: f64) -> (f64, f64) {
+    let (s, ds) = sigmoid::<FMA>(y * inv_rate);
+    (amp * s, amp * ds * inv_rate)
+}
+
+/// The inversion's δ and −dδ/dy at height y (subtracted, as in the scalar code).
+#[inline(always)]
+fn inversion_term<const FMA: bool>([amp, inv_rate, height]: [f64; 3], y: f64) -> (f64, f64) {
+    let (s, ds) = sigmoid::<FMA>((height - y) * inv_rate);
+    (amp * s, amp * ds * inv_rate)
+}

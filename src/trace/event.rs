@@ -1,0 +1,126 @@
+//! The events of one accepted step, decided on its real (f64) parts: the
+//! first crossing of the target plane, the ground (dips below it between the
+//! step's ends included) and the maximum length. Every tracer (scalar, lanes,
+//! stratified) decides by [`decide_step`], so they flag and stop the same
+//! rays; the step limit, which counts attempts, is each tracer's own check.
+//!
+//! Where an event lies is then found by [`locate`], which refines the real θ
+//! in the tracer's number type (dual numbers carry the implicit derivative).
+
+use super::hermite::{Segment, bracketed_root};
+use super::{GroundMode, RayState, TargetPlane};
+use crate::math::{Real, V3};
+
+/// How a step ends the ray, with θ ∈ [0, 1] along the step where it does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum StepEnd {
+    /// It crosses the target plane at θ.
+    Plane(f64),
+    /// It reaches the ground at θ, in [`GroundMode::Stop`].
+    Ground(f64),
+    /// It reaches the maximum length (the step's end is past it).
+    MaxLength,
+}
+
+/// What one step holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StepEvents {
+    /// The step goes below the ground before its end (the ray is occluded
+    /// from here on).
+    pub occluded: bool,
+    /// How the ray ends in this step, if it does.
+    pub end: Option<StepEnd>,
+}
+
+/// The events of the step `seg` toward `target` (if any): a plane crossing
+/// ends the ray, a ground crossing before it flags the ray as occluded (and
+/// ends it in [`GroundMode::Stop`]), and otherwise an arc length of
+/// `max_length` ends it.
+#[inline]
+pub(crate) fn decide_step(
+    seg: &Segment<f64>,
+    target: Option<&TargetPlane>,
+    ground: GroundMode,
+    max_length: f64,
+) -> StepEvents {
+    let plane_theta = target
+        .filter(|t| t.signed_distance(seg.y1.x) >= 0.0)
+        .map(|t| {
+            bracketed_root(0.0, 1.0, |th| {
+                let (x, dx) = seg.position_and_slope(th);
+                (t.signed_distance(x), dx.dot(t.normal))
+            })
+        });
+    let ground_theta = if seg.y0.x.y >= 0.0 {
+        first_ground_crossing(seg)
+    } else {
+        None
+    };
+    // Only a ground crossing before the plane's counts.
+    let ground_theta = match plane_theta {
+        Some(tp) => ground_theta.filter(|&tg| tg < tp),
+        None => ground_theta,
+    };
+    let end = match (ground_theta, plane_theta) {
+        (Some(tg), _) if ground == GroundMode::Stop => Some(StepEnd::Ground(tg)),
+        (_, Some(tp)) => Some(StepEnd::Plane(tp)),
+        _ => (seg.y1.s >= max_length).then_some(StepEnd::MaxLength),
+    };
+    StepEvents {
+        occluded: ground_theta.is_some(),
+        end,
+    }
+}
+
+/// The first θ ∈ [0, 1] where the step goes below y = 0, given y ≥ 0 at its start.
+pub(crate) fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
+    let height = |th: f64| {
+        let (x, dx) = seg.position_and_slope(th);
+        (x.y, dx.y)
+    };
+    if seg.y1.x.y < 0.0 {
+        return Some(bracketed_root(0.0, 1.0, height));
+    }
+    // Both ends above ground: the step can still dip below it if it turns from
+    // descending to rising inside (a mirage ray's lowest point).
+    if seg.f0.dx.y < 0.0 && seg.f1.dx.y > 0.0 {
+        let slope = |th: f64| {
+            let (_, dx) = seg.position_and_slope(th);
+            // d²x/dθ² by a central difference of the analytic slope: only the
+            // sign pattern matters for bracketing the minimum.
+            let e = 1e-6;
+            let (_, dxp) = seg.position_and_slope((th + e).min(1.0));
+            let (_, dxm) = seg.position_and_slope((th - e).max(0.0));
+            (
+                dx.y,
+                (dxp.y - dxm.y) / ((th + e).min(1.0) - (th - e).max(0.0)),
+            )
+        };
+        let lowest = bracketed_root(0.0, 1.0, slope);
+        if seg.position(lowest).y < 0.0 {
+            return Some(bracketed_root(0.0, lowest, height));
+        }
+    }
+    None
+}
+
+/// The point where the step meets the plane through `point` with `normal`,
+/// found at θ on the real trajectory and refined by one Newton step in `T`, so
+/// that dual parts carry the implicit derivative dθ = −∂g/∂p / ∂g/∂θ.
+pub(crate) fn locate<T: Real>(
+    seg: &Segment<T>,
+    real: &Segment<f64>,
+    theta: f64,
+    normal: V3,
+    point: V3,
+) -> (V3<T>, RayState) {
+    let (_, slope) = real.position_and_slope(theta);
+    let slope = slope.dot(normal);
+    let g = (seg.position(T::cst(theta)) - point.lift()).dot(normal.lift());
+    let theta_t = if slope != 0.0 && slope.is_finite() {
+        T::cst(theta) - g * (1.0 / slope)
+    } else {
+        T::cst(theta)
+    };
+    (seg.position(theta_t), real.state(theta))
+}
