@@ -541,13 +541,7 @@ impl Scene {
                 })
             }
         };
-        validate_objects(&file.objects, "objects").map_err(|msg| {
-            // sdf.rs reports "path: message"; split it into the field and the text.
-            match msg.split_once(": ") {
-                Some((field, message)) => Error::input(path, field, message),
-                None => Error::input(path, "objects", msg),
-            }
-        })?;
+        validate_objects(&file.objects).map_err(|e| e.within("objects").in_file(path))?;
 
         let sun = {
             let s = &file.sun;
