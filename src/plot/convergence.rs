@@ -1,12 +1,17 @@
 //! Convergence plots of a fit: the objective against iterations and wall time,
 //! and how each free parameter approached its final value.
 
-use super::{
-    Axes, DrawResult, Figure, LegendEntry, MUTED, Span, Swatch, TICK_SIZE, TextMode, build_chart,
-    decade_range, decade_ticks, draw_axes, draw_dashed, draw_header, draw_label, draw_legend,
-    draw_legend_column, draw_placeholder, format_sig, legend_height, log_label, minus,
-    pixel_mapper, save, series_color, text, truncate_legend,
+use super::axes::{
+    Axes, Span, build_chart, decade_range, decade_ticks, draw_axes, format_sig, log_label, minus,
+    pixel_mapper,
 };
+use super::figure::{Figure, draw_header, draw_placeholder, save};
+use super::legend::{
+    LegendEntry, Swatch, draw_legend, draw_legend_column, legend_height, truncate_legend,
+};
+use super::marker::draw_dashed;
+use super::style::{DrawResult, MUTED, TICK_SIZE, series_color, text};
+use super::text::{TextMode, draw_label};
 use crate::error::Result;
 use crate::fit::History;
 use plotters::coord::Shift;
@@ -30,7 +35,7 @@ const PARAM_LEGEND_W: u32 = 330;
 /// empty one; the format follows the extension of `output` (`.png` or `.svg`)
 /// and the file is written atomically.
 pub fn draw_convergence(history: &History, output: &Path) -> Result<()> {
-    super::ImageFormat::from_path(output)?;
+    super::figure::ImageFormat::from_path(output)?;
     save(&ConvergenceFigure::new(history), output)
 }
 

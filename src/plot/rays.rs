@@ -1,11 +1,12 @@
 //! The ray diagram of a problem: every pair's traced ray in side view, beside
 //! the refractivity profile δ(y) that bends it.
 
-use super::{
-    Axes, DrawResult, Figure, INK, LegendEntry, MUTED, Marker, Span, Swatch, TextMode, build_chart,
-    draw_axes, draw_dashed, draw_header, draw_legend, draw_marker, draw_placeholder, format_sig,
-    legend_height, pixel_mapper, save, series_color, truncate_legend,
-};
+use super::axes::{Axes, Span, build_chart, draw_axes, format_sig, pixel_mapper};
+use super::figure::{Figure, draw_header, draw_placeholder, save};
+use super::legend::{LegendEntry, Swatch, draw_legend, legend_height, truncate_legend};
+use super::marker::{Marker, draw_dashed, draw_marker};
+use super::style::{DrawResult, INK, MUTED, series_color};
+use super::text::TextMode;
 use crate::error::Result;
 use crate::evaluate::pair_report;
 use crate::math::V3;
@@ -52,7 +53,7 @@ fn tint(c: RGBColor, t: f64) -> RGBColor {
 /// (`.png` or `.svg`); the file is written atomically.
 pub fn draw_rays(problem: &Problem, medium: &Medium, output: &Path) -> Result<()> {
     // Refuse a bad extension before spending time on tracing.
-    super::ImageFormat::from_path(output)?;
+    super::figure::ImageFormat::from_path(output)?;
     let figure = RayFigure::new(problem, medium);
     save(&figure, output)
 }

@@ -7,7 +7,7 @@
 //! each shifted by its bearing as read from the embedded font's own tables.
 //! Vector output keeps whole strings (the SVG viewer lays them out itself).
 
-use super::DrawResult;
+use super::style::{DrawResult, FONT_BYTES};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -157,7 +157,7 @@ impl FontMetrics {
 fn metrics() -> Option<&'static FontMetrics> {
     static METRICS: OnceLock<Option<FontMetrics>> = OnceLock::new();
     METRICS
-        .get_or_init(|| FontMetrics::parse(super::FONT_BYTES))
+        .get_or_init(|| FontMetrics::parse(FONT_BYTES))
         .as_ref()
 }
 

@@ -2,11 +2,13 @@
 //! trace time, and fitted objective against fit time, log-log, one curve per
 //! integrator.
 
-use super::{
-    Axes, Corner, DrawResult, Figure, LegendEntry, Span, Swatch, TICK_SIZE, TextMode, build_chart,
-    decade_range, decade_ticks, draw_axes, draw_header, draw_label, draw_legend_box, log_label,
-    pixel_mapper, save, series_color, text,
+use super::axes::{
+    Axes, Span, build_chart, decade_range, decade_ticks, draw_axes, log_label, pixel_mapper,
 };
+use super::figure::{Figure, draw_header, save};
+use super::legend::{Corner, LegendEntry, Swatch, draw_legend_box};
+use super::style::{DrawResult, TICK_SIZE, series_color, text};
+use super::text::{TextMode, draw_label};
 use crate::error::Result;
 use crate::tradeoff::Tradeoff;
 use plotters::coord::Shift;
@@ -16,7 +18,7 @@ use std::path::Path;
 
 /// Draws the Pareto plot of a [`Tradeoff`] to `output` (`.png` or `.svg`).
 pub fn draw_tradeoff(t: &Tradeoff, output: &Path) -> Result<()> {
-    super::ImageFormat::from_path(output)?;
+    super::figure::ImageFormat::from_path(output)?;
     save(&TradeoffFigure { t }, output)
 }
 

@@ -17,7 +17,7 @@ use crate::error::FieldError;
 use crate::medium::{LogisticMedium, Medium};
 use crate::render::accel::{Aabb, Grid};
 use crate::render::air::Air;
-use crate::render::atmosphere::{STAR_CELLS, STAR_FADE, star_cell, star_radius};
+use crate::render::sky::{STAR_CELLS, STAR_FADE, star_cell, star_radius};
 use crate::render::camera::Camera;
 use crate::render::sky::{Sky, SkyModel};
 use crate::render::{RenderOptions, Shading};

@@ -12,7 +12,7 @@ use super::layout::{
     BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, SHADING_ALBEDO, SHADING_LIT,
 };
 use super::program::{Op, STACK_DEPTH};
-use crate::render::atmosphere::{STAR_CELLS, STAR_MARGIN_MAX};
+use crate::render::sky::{STAR_CELLS, STAR_MARGIN_MAX};
 use std::fmt::Write;
 
 /// The hand-written part of the tracing shader (WGSL), which uses the

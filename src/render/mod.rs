@@ -22,7 +22,6 @@
 
 pub mod accel;
 pub mod air;
-pub mod atmosphere;
 pub mod camera;
 pub mod glare;
 pub mod march;

@@ -26,7 +26,7 @@
 //! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
 //! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
 //! | `sun` | `elevation`, `azimuth` (degrees; azimuth from +z toward +x), `irradiance` (default 3.5, linear units), `color` (default white) |
-//! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional), or `{"type": "physical", ...}`: Rayleigh + Mie single scattering with ozone, sun disc and stars (options in [`crate::render::atmosphere`]) |
+//! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional), or `{"type": "physical", ...}`: Rayleigh + Mie single scattering with ozone, sun disc and stars (options in [`crate::render::sky`]) |
 //! | `glare` | veiling glare of the sun and its mirage images: `enabled`, `strength`, `threshold`, `epsilon`, `kernels` ([`crate::scene::glare`]); absent: none |
 //! | `exposure` | multiplies the radiance before tone mapping (default 1) |
 //! | `samples_per_pixel` | default 1 (the pixel centre); more: a low-discrepancy pattern inside the pixel |
@@ -143,7 +143,7 @@ pub enum SkySpec {
         horizon: Option<[f64; 3]>,
     },
     /// Rayleigh and Mie single scattering with ozone, the sun's disc and
-    /// stars ([`crate::render::atmosphere`]).
+    /// stars ([`crate::render::sky`]).
     Physical {
         /// Multiplies the molecular density (default 1).
         #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -492,13 +492,7 @@ impl Scene {
                 })
             }
         };
-        validate_objects(&file.objects, "objects").map_err(|msg| {
-            // sdf.rs reports "path: message"; split it into the field and the text.
-            match msg.split_once(": ") {
-                Some((field, message)) => Error::input(path, field, message),
-                None => Error::input(path, "objects", msg),
-            }
-        })?;
+        validate_objects(&file.objects).map_err(|e| e.within("objects").in_file(path))?;
 
         let sun = {
             let s = &file.sun;
