@@ -15,8 +15,8 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use mirage::fit::objective::Objective;
 use mirage::math::V3;
 use mirage::medium::{Background, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium};
-use mirage::problem::Problem;
 use mirage::pair::PointPair;
+use mirage::problem::Problem;
 use mirage::trace::batch::{
     BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_2d, trace_batch_3d,
 };

@@ -25,7 +25,7 @@
 //! yellow → white ramp from 0 to twice the threshold (clipped there): a pixel is
 //! over the threshold exactly when it is past the orange at the middle of the ramp.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, FieldError, Result};
 use crate::io::{check_not_input, write_atomic, write_json};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -83,24 +83,30 @@ pub struct Limits {
 }
 
 /// A limit: any finite number.
-fn finite(s: &str) -> std::result::Result<f64, String> {
+fn finite(s: &str) -> std::result::Result<f64, crate::error::ValueError> {
     match s
         .parse::<f64>()
-        .map_err(|_| format!("not a number: `{s}`"))?
-    {
+        .map_err(|_| crate::error::ValueError::NotANumber {
+            value: s.to_string(),
+        })? {
         v if v.is_finite() => Ok(v),
-        v => Err(format!("must be a finite number, got {v}")),
+        v => Err(crate::error::ValueError::OutOfRange {
+            rule: format!("must be a finite number, got {v}"),
+        }),
     }
 }
 
 /// `--threshold`: a finite number > 0.
-fn threshold(s: &str) -> std::result::Result<f64, String> {
+fn threshold(s: &str) -> std::result::Result<f64, crate::error::ValueError> {
     match s
         .parse::<f64>()
-        .map_err(|_| format!("not a number: `{s}`"))?
-    {
+        .map_err(|_| crate::error::ValueError::NotANumber {
+            value: s.to_string(),
+        })? {
         v if v.is_finite() && v > 0.0 => Ok(v),
-        v => Err(format!("must be a finite number > 0, got {v}")),
+        v => Err(crate::error::ValueError::OutOfRange {
+            rule: format!("must be a finite number > 0, got {v}"),
+        }),
     }
 }
 
@@ -159,7 +165,7 @@ pub fn load(path: &Path) -> Result<LinearImage> {
         Some("npy") => {
             let bytes = std::fs::read(path)
                 .map_err(|e| Error::input(path, "-", format!("cannot read the file: {e}")))?;
-            parse_npy(&bytes).map_err(|m| Error::input(path, "-", m))?
+            parse_npy(&bytes).map_err(|e| e.in_file(path))?
         }
         _ => {
             return Err(Error::input(
@@ -241,27 +247,30 @@ fn load_exr(path: &Path) -> Result<LinearImage> {
 /// Parses the bytes of a NumPy `.npy` file (read by the `npyz` crate) holding
 /// a C-ordered (H, W), (H, W, 3) or (H, W, 4) array of `f4`, `f8` or `u1`
 /// (either byte order).
-pub fn parse_npy(bytes: &[u8]) -> std::result::Result<LinearImage, String> {
+pub fn parse_npy(bytes: &[u8]) -> std::result::Result<LinearImage, FieldError> {
     use npyz::{DType, Order, TypeChar};
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a readable .npy file: {e}"))?;
+    let npy = npyz::NpyFile::new(bytes)
+        .map_err(|e| FieldError::whole(format!("not a readable .npy file: {e}")))?;
     if npy.order() == Order::Fortran {
-        return Err("Fortran-ordered arrays are not supported (save a C-ordered array)".into());
+        return Err(FieldError::whole(
+            "Fortran-ordered arrays are not supported (save a C-ordered array)",
+        ));
     }
     let shape: Vec<usize> = npy.shape().iter().map(|&d| d as usize).collect();
     let (h, w, c) = match shape[..] {
         [h, w] => (h, w, 1),
         [h, w, c] if c == 3 || c == 4 => (h, w, c),
         _ => {
-            return Err(format!(
+            return Err(FieldError::whole(format!(
                 "shape {shape:?}: expected (H, W), (H, W, 3) or (H, W, 4)"
-            ));
+            )));
         }
     };
     let bad = |e: std::io::Error| match e.kind() {
-        std::io::ErrorKind::UnexpectedEof => {
-            format!("truncated data: fewer values than the shape {shape:?} holds")
-        }
-        _ => format!("cannot read the .npy data: {e}"),
+        std::io::ErrorKind::UnexpectedEof => FieldError::whole(format!(
+            "truncated data: fewer values than the shape {shape:?} holds"
+        )),
+        _ => FieldError::whole(format!("cannot read the .npy data: {e}")),
     };
     let values: Vec<f64> = match npy.dtype() {
         DType::Plain(t) => match (t.type_char(), t.size_field()) {
@@ -279,19 +288,22 @@ pub fn parse_npy(bytes: &[u8]) -> std::result::Result<LinearImage, String> {
                 .map(|v| v as f64 / 255.0)
                 .collect(),
             _ => {
-                return Err(format!(
+                return Err(FieldError::whole(format!(
                     "dtype `{t}`: expected float32 (<f4), float64 (<f8) or uint8 (|u1)"
-                ));
+                )));
             }
         },
         other => {
-            return Err(format!(
+            return Err(FieldError::whole(format!(
                 "dtype {other:?}: expected a plain float32, float64 or uint8 array"
-            ));
+            )));
         }
     };
     if values.len() != h * w * c {
-        return Err(format!("{} values for shape {shape:?}", values.len()));
+        return Err(FieldError::whole(format!(
+            "{} values for shape {shape:?}",
+            values.len()
+        )));
     }
     let pixels = values
         .chunks_exact(c)
@@ -664,13 +676,13 @@ mod tests {
 
     #[test]
     fn npy_errors_are_clear() {
-        assert!(parse_npy(b"hello").unwrap_err().contains("magic"));
+        assert!(parse_npy(b"hello").unwrap_err().message.contains("magic"));
         let e = parse_npy(&npy("<i8", "(1, 1)", &[0; 8])).unwrap_err();
-        assert!(e.contains("dtype"), "{e}");
+        assert!(e.message.contains("dtype"), "{e}");
         let e = parse_npy(&npy("<f8", "(2, 2, 2)", &[0; 64])).unwrap_err();
-        assert!(e.contains("shape"), "{e}");
+        assert!(e.message.contains("shape"), "{e}");
         let e = parse_npy(&npy("<f8", "(2, 2)", &[0; 8])).unwrap_err();
-        assert!(e.contains("truncated"), "{e}");
+        assert!(e.message.contains("truncated"), "{e}");
     }
 
     #[test]

@@ -122,13 +122,16 @@ pub struct SkyOptions {
 }
 
 /// `--width`/`--height` of a sky map: 2 to [`MAX_SIDE`] texels.
-fn map_side(s: &str) -> std::result::Result<u32, String> {
+fn map_side(s: &str) -> std::result::Result<u32, crate::error::ValueError> {
     match s
         .parse::<u32>()
-        .map_err(|_| format!("not a whole number: `{s}`"))?
-    {
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })? {
         v if (2..=MAX_SIDE).contains(&v) => Ok(v),
-        v => Err(side_message(v)),
+        v => Err(crate::error::ValueError::OutOfRange {
+            rule: side_message(v),
+        }),
     }
 }
 

@@ -71,6 +71,30 @@ pub fn join_path(prefix: &str, path: &str) -> String {
     }
 }
 
+/// A command-line value refused by its parser; clap names the flag (see
+/// `cli::parse_error`, which makes it an [`Error::Usage`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ValueError {
+    /// Not a number at all.
+    #[error("not a number: `{value}`")]
+    NotANumber {
+        /// The value as typed.
+        value: String,
+    },
+    /// Not a whole number.
+    #[error("not a whole number: `{value}`")]
+    NotAWholeNumber {
+        /// The value as typed.
+        value: String,
+    },
+    /// A number outside the flag's range.
+    #[error("{rule}")]
+    OutOfRange {
+        /// The range and the value, in words (`must be at least 1, got 0`).
+        rule: String,
+    },
+}
+
 /// Every error mirage reports.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {

@@ -59,12 +59,15 @@ pub enum Command {
 }
 
 /// `--threads`: at least 1.
-fn thread_count(s: &str) -> std::result::Result<usize, String> {
+fn thread_count(s: &str) -> std::result::Result<usize, crate::error::ValueError> {
     match s
         .parse::<usize>()
-        .map_err(|_| format!("not a whole number: `{s}`"))?
-    {
-        0 => Err("must be at least 1".into()),
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })? {
+        0 => Err(crate::error::ValueError::OutOfRange {
+            rule: "must be at least 1".into(),
+        }),
         n => Ok(n),
     }
 }

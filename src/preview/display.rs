@@ -3,10 +3,8 @@
 //! window back as a PNG (the `--screenshot`).
 
 use super::gpu::Gpu;
+use super::shader::DISPLAY_SHADER;
 use crate::error::{Error, Result};
-
-/// The display shader (WGSL).
-pub const DISPLAY_SHADER: &str = include_str!("display.wgsl");
 
 /// The display pipeline for a surface `format`, its bind group layout (the
 /// uniform rectangle and mode, the linear image) and its uniform buffer.

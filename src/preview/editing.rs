@@ -240,7 +240,7 @@ impl FitJob {
                     }
                 });
             let result = crate::fit::fit(&problem, Some(hook))
-                .and_then(|report| super::logistic(&report.medium, &problem.source).cloned())
+                .and_then(|report| super::input::logistic(&report.medium, &problem.source).cloned())
                 .map_err(Arc::new);
             if let Ok(mut p) = done.lock() {
                 p.done = Some(result);

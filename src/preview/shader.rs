@@ -19,6 +19,10 @@ use std::fmt::Write;
 /// prelude's names; see [`trace_shader`] for the whole.
 pub const TRACE_WGSL: &str = include_str!("trace.wgsl");
 
+/// The display shader (WGSL): tone mapping and sRGB encoding of the traced
+/// image into the window. It shares no constant with Rust.
+pub const DISPLAY_SHADER: &str = include_str!("display.wgsl");
+
 /// Compute workgroup side (the shader's `@workgroup_size(WORKGROUP,
 /// WORKGROUP)`).
 pub const WORKGROUP: u32 = 8;
@@ -109,7 +113,7 @@ mod tests {
     #[test]
     fn the_shaders_are_valid_wgsl() {
         validate("trace shader", &trace_shader());
-        validate("display.wgsl", crate::preview::display::DISPLAY_SHADER);
+        validate("display.wgsl", DISPLAY_SHADER);
     }
 
     #[test]

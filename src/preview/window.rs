@@ -21,11 +21,11 @@
 //! Overlays (hot-spot rims, pair markers) are placed with straight rays: they
 //! mark where things are, the traced image shows where they appear.
 
-use super::Input;
 use super::camera::{CameraState, MAX_FOV, MIN_FOV};
 use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
 use super::gpu::{Gpu, Tracer, copy_to_buffer};
+use super::input::Input;
 use super::pack::{SceneBuffers, View, pack};
 use crate::error::{Error, FieldError, Result};
 use crate::io::write_atomic;
@@ -619,7 +619,7 @@ impl App {
     /// Whether this frame traces the view: yes while anything changes, or
     /// when the scene has no glare to show. Once the view has been still for
     /// a frame, the image traced last is read back, given the scene's glare
-    /// on the CPU ([`super::apply_glare`], as headless frames get it) and
+    /// on the CPU ([`super::frame::apply_glare`], as headless frames get it) and
     /// uploaded in its place, and no frame is traced until something changes.
     fn glare_or_trace(&mut self, g: &Graphics, view: &View, medium_changed: bool) -> Result<bool> {
         let params = bytemuck::bytes_of(&g.buffers.params);
@@ -632,7 +632,7 @@ impl App {
         }
         if !self.glared {
             let mut pixels = g.tracer.read_back(&g.gpu)?;
-            if let Some(stats) = super::apply_glare(&self.input.scene, view, &mut pixels) {
+            if let Some(stats) = super::frame::apply_glare(&self.input.scene, view, &mut pixels) {
                 g.tracer.upload(&g.gpu, &pixels);
                 self.glare_message = format!(
                     "glare: {} source pixels, {:.0} ms",

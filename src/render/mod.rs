@@ -580,37 +580,46 @@ impl clap::ValueEnum for TracerKind {
 
 /// `--width`/`--height` of a render or preview: 1 to
 /// [`MAX_IMAGE_SIDE`](crate::scene::description::MAX_IMAGE_SIDE) pixels.
-pub(crate) fn image_side(s: &str) -> std::result::Result<u32, String> {
+pub(crate) fn image_side(s: &str) -> std::result::Result<u32, crate::error::ValueError> {
     let max = crate::scene::description::MAX_IMAGE_SIDE;
     match s
         .parse::<u32>()
-        .map_err(|_| format!("not a whole number: `{s}`"))?
-    {
-        v if v == 0 || v > max => Err(format!("must be between 1 and {max} pixels, got {v}")),
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })? {
+        v if v == 0 || v > max => Err(crate::error::ValueError::OutOfRange {
+            rule: format!("must be between 1 and {max} pixels, got {v}"),
+        }),
         v => Ok(v),
     }
 }
 
 /// `--spp`: 1 to [`MAX_SAMPLES_PER_PIXEL`](crate::scene::description::MAX_SAMPLES_PER_PIXEL).
-fn samples_per_pixel(s: &str) -> std::result::Result<u32, String> {
+fn samples_per_pixel(s: &str) -> std::result::Result<u32, crate::error::ValueError> {
     let max = crate::scene::description::MAX_SAMPLES_PER_PIXEL;
     match s
         .parse::<u32>()
-        .map_err(|_| format!("not a whole number: `{s}`"))?
-    {
-        n if n == 0 || n > max => Err(format!("must be between 1 and {max}, got {n}")),
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })? {
+        n if n == 0 || n > max => Err(crate::error::ValueError::OutOfRange {
+            rule: format!("must be between 1 and {max}, got {n}"),
+        }),
         n => Ok(n),
     }
 }
 
 /// `--hit-fraction`: in (0, 1].
-fn hit_fraction(s: &str) -> std::result::Result<f64, String> {
+fn hit_fraction(s: &str) -> std::result::Result<f64, crate::error::ValueError> {
     match s
         .parse::<f64>()
-        .map_err(|_| format!("not a number: `{s}`"))?
-    {
+        .map_err(|_| crate::error::ValueError::NotANumber {
+            value: s.to_string(),
+        })? {
         f if f.is_finite() && f > 0.0 && f <= 1.0 => Ok(f),
-        f => Err(format!("must be in (0, 1] (fraction of a pixel), got {f}")),
+        f => Err(crate::error::ValueError::OutOfRange {
+            rule: format!("must be in (0, 1] (fraction of a pixel), got {f}"),
+        }),
     }
 }
 

@@ -1,0 +1,192 @@
+//! `mirage preview`: its options (each flag defined once, checked by clap) and
+//! the command: the window, or a headless frame to a PNG and the `--bench`
+//! timing.
+
+use super::gpu::Tracer;
+use super::pack::{View, pack};
+use crate::error::{Error, Result};
+use crate::io::{check_not_input, write_atomic};
+use crate::plot::ImageFormat;
+use crate::render::output::{ToneMap, encode_png};
+use crate::render::{RenderOptions, Shading};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::frame::{open_gpu, render_frame};
+use super::input::{BENCH_SIZE, load_input};
+
+/// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+pub struct PreviewOptions {
+    /// Scene or problem file (JSON).
+    pub input: PathBuf,
+    /// No window: render one frame offscreen (to --output).
+    #[arg(long)]
+    pub headless: bool,
+    /// The headless frame (.png).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Frame width in pixels (default: the scene's, or the window's).
+    #[arg(long, value_parser = crate::render::image_side)]
+    pub width: Option<u32>,
+    /// Frame height in pixels.
+    #[arg(long, value_parser = crate::render::image_side)]
+    pub height: Option<u32>,
+    /// Show the albedo of what each ray hits.
+    #[arg(long)]
+    pub albedo: bool,
+    /// Straight rays (δ ≡ 0), for comparison.
+    #[arg(long)]
+    pub straight: bool,
+    /// With --headless: print the time per frame (1280×720 unless sized).
+    #[arg(long)]
+    pub bench: bool,
+    /// Close the window after this many frames.
+    #[arg(long, value_parser = frame_count)]
+    pub frames: Option<u64>,
+    /// Save the window (frame and panels) here when it closes (.png).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Leave out the scene's veiling glare.
+    #[arg(long)]
+    pub no_glare: bool,
+}
+
+/// `--frames`: at least 1.
+fn frame_count(s: &str) -> std::result::Result<u64, crate::error::ValueError> {
+    match s
+        .parse::<u64>()
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })? {
+        0 => Err(crate::error::ValueError::OutOfRange {
+            rule: "must be at least 1".into(),
+        }),
+        n => Ok(n),
+    }
+}
+
+fn check_png(path: &Path, inputs: &[&Path]) -> Result<()> {
+    match ImageFormat::from_path(path)? {
+        ImageFormat::Png => {}
+        ImageFormat::Svg => {
+            return Err(Error::input(
+                path,
+                "-",
+                "previews are raster images: use a .png output",
+            ));
+        }
+    }
+    check_not_input(path, inputs)
+}
+
+/// The frame size for the options: both given, one given (the other from the
+/// scene's aspect ratio), or the scene's.
+fn frame_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let (w0, h0) = (scene.camera.width as f64, scene.camera.height as f64);
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, ((w as f64 * h0 / w0).round() as u32).max(1)),
+        (None, Some(h)) => (((h as f64 * w0 / h0).round() as u32).max(1), h),
+        (None, None) => (scene.camera.width, scene.camera.height),
+    }
+}
+
+/// `mirage preview`: the window, or with `headless` one frame to a PNG (and
+/// with `bench` the time per frame).
+pub fn preview_command(o: &PreviewOptions) -> Result<()> {
+    let (width, height) = (o.width, o.height);
+    let mut input = load_input(&o.input)?;
+    if o.no_glare {
+        input.scene.glare = None;
+    }
+    let mut inputs: Vec<&Path> = vec![o.input.as_path()];
+    inputs.extend(input.scene.inputs.iter().map(PathBuf::as_path));
+    if let Some(out) = &o.output {
+        check_png(out, &inputs)?;
+    }
+    if let Some(shot) = &o.screenshot {
+        check_png(shot, &inputs)?;
+    }
+    if o.headless && (o.frames.is_some() || o.screenshot.is_some()) {
+        return Err(Error::usage(
+            if o.frames.is_some() {
+                "--frames"
+            } else {
+                "--screenshot"
+            },
+            "only for the window (a headless frame goes to --output)",
+        ));
+    }
+    if !o.headless {
+        if o.output.is_some() || o.bench {
+            return Err(Error::usage(
+                if o.bench { "--bench" } else { "--output" },
+                "only with --headless (the window saves with --screenshot)",
+            ));
+        }
+        return super::window::run(
+            input,
+            width,
+            height,
+            o.albedo,
+            o.straight,
+            o.frames,
+            o.screenshot.clone(),
+        );
+    }
+    if o.output.is_none() && !o.bench {
+        return Err(Error::usage(
+            "--output",
+            "a headless preview needs an output image (-o frame.png) or --bench",
+        ));
+    }
+    let options = RenderOptions {
+        shading: if o.albedo {
+            Shading::Albedo
+        } else {
+            Shading::Lit
+        },
+        straight: o.straight,
+        ..RenderOptions::default()
+    };
+    let gpu = open_gpu()?;
+    let scene = &input.scene;
+    if o.bench {
+        let (w, h) = match (width, height) {
+            (None, None) => BENCH_SIZE,
+            _ => frame_size(scene, width, height),
+        };
+        let view = View::of_scene(scene, &options, w, h);
+        let buffers = pack(scene, &scene.medium, &view).map_err(|e| e.in_file(&o.input))?;
+        let tracer = Tracer::new(&gpu, &buffers);
+        tracer.render(&gpu);
+        let frames = 3;
+        let start = Instant::now();
+        for _ in 0..frames {
+            tracer.render(&gpu);
+        }
+        let ms = start.elapsed().as_secs_f64() * 1000.0 / frames as f64;
+        println!(
+            "{}: {w}×{h} px on {}: {ms:.1} ms/frame ({:.1} frames/s, mean of {frames})",
+            scene.name,
+            gpu.describe(),
+            1000.0 / ms
+        );
+    }
+    if let Some(out) = &o.output {
+        let (w, h) = frame_size(scene, width, height);
+        let view = View::of_scene(scene, &options, w, h);
+        let pixels = render_frame(&gpu, scene, &scene.medium, &view)?;
+        let tone = match options.shading {
+            Shading::Lit => ToneMap::Filmic {
+                exposure: scene.exposure,
+            },
+            Shading::Albedo => ToneMap::Clamp,
+        };
+        let png = encode_png(w, h, &pixels, tone)?;
+        write_atomic(out, &png)?;
+    }
+    Ok(())
+}
