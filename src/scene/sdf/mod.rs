@@ -119,7 +119,6 @@
 //!                                          "b": [0, 0, 0], "radius": 0.025 } ] } } } }
 //! ]
 //! ```
-#![warn(missing_docs)]
 
 mod bounds;
 mod construction;
