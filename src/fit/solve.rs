@@ -5,8 +5,8 @@ use super::history::{IterationRecord, RunHistory};
 use super::lm::{LevenbergMarquardt, LmState};
 use super::objective::Objective;
 use crate::error::Error;
-use crate::problem::{SolverMethod, SolverSettings};
 use crate::math::SplitMix64;
+use crate::problem::{SolverMethod, SolverSettings};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     CostFunction, Error as ArgminError, Executor, IterState, Jacobian, KV, Operator, State,
