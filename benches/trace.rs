@@ -316,7 +316,6 @@ fn table() {
     let (_, objective) = objectives().pop().unwrap();
     let x: Vec<f64> = objective.start().iter().copied().collect();
     let field = objective.medium(&x).field();
-    let field = field.as_logistic().expect("a logistic problem");
     let pairs = objective.pairs();
     let batch_jobs: Vec<RayJob> = pairs.iter().map(PointPair::ray_job).collect();
     let batch = BatchOptions::from_trace_options(objective.options()).unwrap();

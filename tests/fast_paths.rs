@@ -7,7 +7,7 @@
 //! largest differences.
 
 use mirage::math::{SplitMix64, V3};
-use mirage::medium::{Background, HotSpot, Inversion, LogisticField, LogisticMedium};
+use mirage::medium::{Background, Field, HotSpot, Inversion, LogisticField, LogisticMedium};
 use mirage::trace::batch::{
     BatchOptions, Isa, LANES, NotStratified, RayJob, exp_in_place, trace_batch, trace_batch_2d,
     trace_batch_3d,
@@ -212,7 +212,10 @@ fn batch_paths(
             Err(NotStratified) => assert!(!field_is_stratified(field)),
         }
     }
-    out.push(("auto".to_string(), trace_batch(field, jobs, options)));
+    out.push((
+        "auto".to_string(),
+        trace_batch(&Field::Logistic(field.clone()), jobs, options),
+    ));
     out
 }
 
@@ -404,7 +407,7 @@ fn empty_batch_is_fine() {
     let batch =
         BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 })).unwrap();
     for (_, m) in media() {
-        assert!(trace_batch(&m.field(), &[], &batch).is_empty());
+        assert!(trace_batch(&Field::Logistic(m.field()), &[], &batch).is_empty());
     }
     assert!(
         BatchOptions::from_trace_options(&TraceOptions::new(Method::Dopri5 { tolerance: 1e-9 }))

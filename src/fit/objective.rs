@@ -129,18 +129,16 @@ impl Objective {
     }
 
     /// Residuals and flags at `x`. Pairs are traced in parallel; with RK4 they
-    /// go through the SIMD lanes kernel (same steps and endpoints as the scalar
-    /// tracer to ~1e-12 m). The result is identical for any number of threads.
+    /// go through the batch entry (for the logistic kind the SIMD lanes kernel:
+    /// same steps and endpoints as the scalar tracer to ~1e-12 m). The result
+    /// is identical for any number of threads.
     pub fn residuals(&self, x: &[f64]) -> (DVector<f64>, Vec<PairFlags>) {
         self.residual_evaluations.fetch_add(1, Ordering::Relaxed);
         let field = self.medium(x).field();
-        let traces: Vec<Trace> = match (
-            BatchOptions::from_trace_options(&self.options),
-            field.as_logistic(),
-        ) {
-            // The lanes kernel evaluates the logistic formula; other kinds take
-            // the general tracer.
-            (Some(batch), Some(field)) => {
+        let traces: Vec<Trace> = match BatchOptions::from_trace_options(&self.options) {
+            // RK4 goes through the batch entry, which takes the lanes kernel
+            // for the logistic kind and the general tracer for the others.
+            Some(batch) => {
                 let mut out = vec![Trace::default(); self.pairs.len()];
                 // Chunks of one lane width; the split is fixed, so threads only
                 // change who computes a chunk, not what it computes.
@@ -150,7 +148,7 @@ impl Objective {
                     .for_each(|(jobs, out)| trace_batch_into(&field, jobs, &batch, out));
                 out
             }
-            _ => self
+            None => self
                 .pairs
                 .par_iter()
                 .map(|pair| pair.evaluate::<f64, _>(&field, &self.options, None).0)

@@ -1,6 +1,7 @@
 //! Many rays at once: fixed-step RK4 through a [`LogisticField`] over
 //! [`LANES`] rays held in structure-of-arrays lanes, with the instruction set
-//! picked at run time.
+//! picked at run time. [`trace_batch`] takes a [`Field`] of any kind and sends
+//! the kinds the lanes do not evaluate to the scalar tracer, job by job.
 //!
 //! # Semantics
 //!
@@ -36,15 +37,15 @@
 //! # Use
 //!
 //! ```
-//! use mirage::medium::{Background, LogisticMedium};
+//! use mirage::medium::{Background, LogisticMedium, Medium};
 //! use mirage::pair::PointPair;
 //! use mirage::trace::batch::{BatchOptions, trace_batch};
 //! use mirage::trace::{Method, TraceOptions};
 //!
-//! let medium = LogisticMedium {
+//! let medium = Medium::Logistic(LogisticMedium {
 //!     background: Some(Background { n: 1.0, a: 40.0 }),
 //!     ..LogisticMedium::vacuum()
-//! };
+//! });
 //! let pair = PointPair {
 //!     origin: [0.0, 2.0, 0.0],
 //!     through: [0.0, 2.0, 100.0],
@@ -79,13 +80,16 @@ pub use kernel::trace_batch_3d;
 pub use lanes::LANES;
 pub use stratified::{NotStratified, trace_batch_2d};
 
-use crate::medium::LogisticField;
-use crate::trace::Trace;
+use crate::medium::{Field, LogisticField};
+use crate::trace::{Method, Trace, TraceOptions, trace};
 
-/// Traces every job by the fastest path for this field and CPU: the 2-D
-/// [`stratified`] kernel when the field has no hot spots, the 3-D lanes kernel
-/// otherwise. `result[i]` is the trace of `jobs[i]`.
-pub fn trace_batch(field: &LogisticField, jobs: &[RayJob], options: &BatchOptions) -> Vec<Trace> {
+/// Traces every job by the fastest path for this field and CPU: for the
+/// logistic kind, the 2-D [`stratified`] kernel when the field has no hot
+/// spots and the 3-D lanes kernel otherwise; any other kind (the lanes
+/// evaluate the logistic formula only) through the general scalar tracer
+/// [`trace`](crate::trace::trace), job by job, with the same options, so the
+/// results mean the same. `result[i]` is the trace of `jobs[i]`.
+pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Vec<Trace> {
     let mut out = vec![driver::placeholder(); jobs.len()];
     trace_batch_into(field, jobs, options, &mut out);
     out
@@ -96,7 +100,15 @@ pub fn trace_batch(field: &LogisticField, jobs: &[RayJob], options: &BatchOption
 ///
 /// # Panics
 /// If `out.len() != jobs.len()`.
-pub fn trace_batch_into(
+pub fn trace_batch_into(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
+    match field {
+        Field::Logistic(field) => trace_logistic(field, jobs, options, out),
+        Field::LinearSquare(_) => trace_scalar(field, jobs, options, out),
+    }
+}
+
+/// The lanes kernels: 2-D when the field is stratified, else 3-D.
+fn trace_logistic(
     field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
@@ -105,5 +117,26 @@ pub fn trace_batch_into(
     let isa = Isa::detect();
     if trace_batch_2d(isa, field, jobs, options, out).is_err() {
         trace_batch_3d(isa, field, jobs, options, out);
+    }
+}
+
+/// The general tracer, one job after the other, with the batch's options.
+fn trace_scalar(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
+    assert_eq!(out.len(), jobs.len(), "one output slot per job");
+    let options = TraceOptions {
+        method: Method::Rk4 { step: options.step },
+        max_length: options.max_length,
+        ground: options.ground,
+        max_steps: options.max_steps,
+    };
+    for (job, out) in jobs.iter().zip(out) {
+        *out = trace::<f64, _>(
+            field,
+            job.origin,
+            job.direction,
+            Some(&job.target),
+            &options,
+            None,
+        );
     }
 }
