@@ -4,7 +4,6 @@
 //! compiled medium ([`medium::Field`]) → rays ([`trace`]) → residuals →
 //! solver → fitted medium → images.
 
-
 pub mod cli;
 pub mod compare;
 pub mod envmap;
