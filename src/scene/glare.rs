@@ -73,7 +73,7 @@ pub struct WeightedKernel {
 }
 
 /// A scene's glare with kernel sizes in degrees (what scene files say);
-/// [`AngularGlare::in_pixels`] turns it into [`GlareSettings`] for a camera.
+/// [`AngularGlare::in_pixels`] turns it into `render::glare::GlareSettings` for a camera.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AngularGlare {
     /// Kernels with `sigma`/`radius` in degrees and weights already scaled by

@@ -11,7 +11,7 @@ use crate::math::{Real, V3};
 use crate::medium::IndexField;
 
 /// Traces the ray from `origin` along the unit vector `direction` until it
-/// crosses `target` (if given), reaches the ground in [`GroundMode::Stop`], or
+/// crosses `target` (if given), reaches the ground in [`GroundMode::Stop`](super::GroundMode::Stop), or
 /// travels the maximum length. If `path` is given, the start and every step's end
 /// are appended to it (for plots); nothing is allocated otherwise.
 pub fn trace<T: Real, F: IndexField<T> + ?Sized>(

@@ -323,7 +323,7 @@ impl LevenbergMarquardt {
     }
 
     /// Sets how many consecutive rejected steps end the run with
-    /// [`REASON_STALL_REJECTIONS`](Self::REASON_STALL_REJECTIONS).
+    /// [`LmStop::StallRejections`].
     /// Errors on `0`.
     pub fn with_max_rejections(mut self, max_rejections: u64) -> Result<Self, Error> {
         if max_rejections == 0 {

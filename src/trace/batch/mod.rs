@@ -5,13 +5,13 @@
 //!
 //! # Semantics
 //!
-//! Each ray is traced exactly as [`trace`](crate::trace::trace) traces it with
+//! Each ray is traced exactly as [`crate::trace::trace`] traces it with
 //! [`Method::Rk4`] and a target plane: the same τ-form state, the same step
 //! sequence, the endpoint where the quintic Hermite interpolant of the crossing
 //! step meets the plane, `occluded` (also for dips below the ground between two
 //! step ends), `unreachable` with the traced point nearest the plane, the
 //! maximum length (default 4 × the distance to the target), the step limit,
-//! [`GroundMode`], and the same [`Stats`]. The only numerical difference is
+//! [`GroundMode`](crate::trace::GroundMode), and the same [`Stats`](crate::trace::Stats). The only numerical difference is
 //! the exponential: a polynomial ([`fastexp`](crate::trace::fastexp), within 1 ulp of
 //! `f64::exp`) instead of libm's, and fused multiply–adds where the CPU has
 //! them; endpoints agree with the scalar tracer to about 10⁻¹¹ m
@@ -87,7 +87,7 @@ use crate::trace::{Method, Trace, TraceOptions, trace};
 /// logistic kind, the 2-D [`stratified`] kernel when the field has no hot
 /// spots and the 3-D lanes kernel otherwise; any other kind (the lanes
 /// evaluate the logistic formula only) through the general scalar tracer
-/// [`trace`](crate::trace::trace), job by job, with the same options, so the
+/// [`crate::trace::trace`], job by job, with the same options, so the
 /// results mean the same. `result[i]` is the trace of `jobs[i]`.
 pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Vec<Trace> {
     let mut out = vec![driver::placeholder(); jobs.len()];
