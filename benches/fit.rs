@@ -52,6 +52,8 @@ fn bench_fits(c: &mut Criterion) {
     let mut files: Vec<_> = std::fs::read_dir(problems_dir())
         .unwrap()
         .map(|e| e.unwrap().path())
+        // Problem files only: `problems/scenes/` holds scenes.
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
         .collect();
     files.sort();
     for f in files {
