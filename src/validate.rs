@@ -39,6 +39,23 @@ pub fn finite(field: &str, v: f64) -> Result<f64, FieldError> {
     }
 }
 
+/// A command-line count: a whole number of at least 1 (`--threads`, `--frames`).
+pub fn at_least_one<T: std::str::FromStr + PartialEq + From<u8>>(
+    s: &str,
+) -> Result<T, crate::error::ValueError> {
+    let n: T = s
+        .parse()
+        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
+            value: s.to_string(),
+        })?;
+    if n == T::from(0) {
+        return Err(crate::error::ValueError::OutOfRange {
+            rule: "must be at least 1".into(),
+        });
+    }
+    Ok(n)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

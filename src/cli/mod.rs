@@ -60,16 +60,7 @@ pub enum Command {
 
 /// `--threads`: at least 1.
 fn thread_count(s: &str) -> std::result::Result<usize, crate::error::ValueError> {
-    match s
-        .parse::<usize>()
-        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
-            value: s.to_string(),
-        })? {
-        0 => Err(crate::error::ValueError::OutOfRange {
-            rule: "must be at least 1".into(),
-        }),
-        n => Ok(n),
-    }
+    crate::validate::at_least_one(s)
 }
 
 impl Cli {

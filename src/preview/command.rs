@@ -55,16 +55,7 @@ pub struct PreviewOptions {
 
 /// `--frames`: at least 1.
 fn frame_count(s: &str) -> std::result::Result<u64, crate::error::ValueError> {
-    match s
-        .parse::<u64>()
-        .map_err(|_| crate::error::ValueError::NotAWholeNumber {
-            value: s.to_string(),
-        })? {
-        0 => Err(crate::error::ValueError::OutOfRange {
-            rule: "must be at least 1".into(),
-        }),
-        n => Ok(n),
-    }
+    crate::validate::at_least_one(s)
 }
 
 fn check_png(path: &Path, inputs: &[&Path]) -> Result<()> {
