@@ -1,0 +1,3 @@
+//! Real air (docs/air.md): the state of the air turned into a refractive index.
+pub mod humidity;
+pub mod refractivity;
