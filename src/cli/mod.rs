@@ -11,6 +11,7 @@ pub mod fit;
 #[cfg(feature = "preview")]
 pub mod preview;
 pub mod rays;
+pub mod refractivity;
 pub mod render;
 pub mod sky;
 pub mod trace;
@@ -53,6 +54,8 @@ pub enum Command {
     Compare(compare::CompareOptions),
     /// Write a scene's sky as a lat-long environment map (Mitsuba's envmap convention).
     Sky(sky::SkyOptions),
+    /// Print n − 1 of air at a temperature, pressure, humidity and wavelength.
+    Refractivity(refractivity::RefractivityOptions),
     /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
     #[cfg(feature = "preview")]
     Preview(preview::PreviewOptions),
@@ -85,6 +88,7 @@ impl Cli {
             Command::Render(o) => render::run(o),
             Command::Compare(o) => compare::run(o),
             Command::Sky(o) => sky::run(o),
+            Command::Refractivity(o) => refractivity::run(o).map(|_| ()),
             #[cfg(feature = "preview")]
             Command::Preview(o) => preview::run(o),
         }

@@ -290,7 +290,7 @@ mod tests {
     }
 
     #[test]
-    fn the_nist_example_and_other_published_values() {
+    fn nist_procedure_reproduces_published_values() {
         // The example of NIST's documentation (633 nm, 20 °C, 101.325 kPa, 20 %
         // RH, 450 ppm), and the other cases, as computed to 17 digits by
         // P. Nair's `ref_index` (github.com/phn/ref_index, README), a separate
