@@ -10,6 +10,7 @@
 //! - [`Envelope`] gives the bounds and features a stepper needs beyond δ.
 //! - [`Param`] names every parameter by its path (`hotspots[2].radius`).
 
+pub mod air;
 pub mod analytic;
 mod envelope;
 mod kind;

@@ -1,0 +1,1 @@
+//! Hydrostatic pressure over a temperature profile (next commit).
