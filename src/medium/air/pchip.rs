@@ -115,7 +115,7 @@ impl<U: Real> Pchip<U> {
             return (self.y[n - 1], slope);
         }
         // The interval k with x_k ≤ h < x_{k+1}: the number of rows ≤ h, less one.
-        let k = self.x.partition_point(|x| x.val() <= hv) - 1;
+        let k = self.x.partition_point(|x| x.val() <= hv).saturating_sub(1);
         let w = self.x[k + 1] - self.x[k];
         let t = (h - self.x[k]) / w;
         let (y0, y1) = (self.y[k], self.y[k + 1]);

@@ -63,7 +63,7 @@ const MW_STEP: f64 = 500.0;
 /// The geometric heights (m) where dT/dh jumps: the layer bases above the ground, the
 /// top, and the nodes of the molecular-weight table (80 … 86 km). A table of the
 /// integral of 1/T must have nodes there to stay accurate.
-pub const US1976_BREAKS: [f64; 18] = [
+pub const US1976_BREAKS: [f64; 19] = [
     // Layer bases at H = 11, 20, 32, 47, 51, 71 km, as geometric heights r0·H/(r0 − H).
     11_019.067_832_000_108,
     20_063.123_681_701_36,
@@ -82,6 +82,7 @@ pub const US1976_BREAKS: [f64; 18] = [
     84_000.0,
     84_500.0,
     85_000.0,
+    85_500.0,
     US1976_TOP,
 ];
 
