@@ -71,6 +71,23 @@ pub fn join_path(prefix: &str, path: &str) -> String {
     }
 }
 
+/// The marker around a path below the place a deserializer reports an error:
+/// a `Deserialize` implementation that must buffer (and so loses serde's
+/// path tracking) writes `nested_message(path, message)`, and the JSON reader
+/// joins `path` to the reported one (see [`split_nested`]).
+const NESTED: char = '\u{1}';
+
+/// A deserialization error message that carries a path below the reported one.
+pub fn nested_message(path: &str, message: &str) -> String {
+    format!("{NESTED}{path}{NESTED}{message}")
+}
+
+/// The (path, message) of a [`nested_message`], or `None` for a plain one.
+pub fn split_nested(message: &str) -> Option<(&str, &str)> {
+    let rest = message.strip_prefix(NESTED)?;
+    rest.split_once(NESTED)
+}
+
 /// A command-line value refused by its parser; clap names the flag (see
 /// `cli::parse_error`, which makes it an [`Error::Usage`]).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]

@@ -18,6 +18,9 @@ pub struct PairReport {
     pub distance: f64,
     /// w·(endpoint − target).
     pub residual: [f64; 3],
+    /// The unit direction of the ray where it ended (on its target plane
+    /// unless `unreachable`).
+    pub direction: [f64; 3],
     /// The ray dipped below the ground before its target plane.
     pub occluded: bool,
     /// The ray never reached its target plane.
@@ -101,6 +104,7 @@ pub fn pair_report<F: IndexField + ?Sized>(
         target: pair.target,
         distance: (t.endpoint - pair.target()).norm(),
         residual: r.to_array(),
+        direction: t.direction.to_array(),
         occluded: t.occluded,
         unreachable: t.unreachable,
         end: t.end,

@@ -2,7 +2,7 @@
 //! failure (unreadable file, empty file, not an object, a type error deep inside,
 //! trailing text), so that no caller writes its own.
 
-use crate::error::{Error, FieldError, Result};
+use crate::error::{Error, FieldError, Result, join_path, split_nested};
 use std::path::Path;
 
 /// Reads an input file; failure is an input error naming the file (exit 2).
@@ -46,7 +46,17 @@ pub fn parse_json<T: serde::de::DeserializeOwned>(
         } else {
             inner.to_string()
         };
-        Error::input(path, field, message)
+        match split_nested(&message) {
+            Some((below, rest)) => {
+                let field = if field == "-" {
+                    below.to_string()
+                } else {
+                    join_path(&field, below)
+                };
+                Error::input(path, field, rest.to_string())
+            }
+            None => Error::input(path, field, message),
+        }
     })?;
     de.end().map_err(|e| {
         Error::input(

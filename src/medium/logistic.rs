@@ -29,6 +29,7 @@
 //! ```
 
 use super::envelope::{Envelope, Patch, VerticalFeature};
+use super::rim::rim_weight;
 use super::{HotField, IndexField, Param};
 use crate::error::FieldError;
 use crate::math::{Real, V3, sigmoid};
@@ -128,8 +129,8 @@ impl<T: Copy> LogisticMedium<T> {
             out.push((Param::InversionHeight, i.height));
         }
         for (j, h) in self.hotspots.iter().enumerate() {
-            for f in HotField::ALL {
-                out.push((Param::Hot(j, f), *h.field(f)));
+            for f in HotField::LOGISTIC {
+                out.push((Param::Hot(j, f), *h.field(f).expect("a logistic field")));
             }
         }
         out
@@ -160,6 +161,11 @@ impl<T: Copy> LogisticMedium<T> {
             Param::InversionN | Param::InversionA | Param::InversionHeight => {
                 "this medium has no inversion layer".to_string()
             }
+            Param::Scale => "always present".to_string(),
+            Param::Hot(_, HotField::Delta | HotField::ScaleHeight) => {
+                "a field of real air's hot spots (docs/air.md); a logistic hot spot has `n` and `a`"
+                    .to_string()
+            }
             Param::Hot(j, _) => match self.hotspots.len() {
                 0 => "this medium has no hot spots".to_string(),
                 n => format!(
@@ -167,9 +173,11 @@ impl<T: Copy> LogisticMedium<T> {
                     n - 1
                 ),
             },
-            Param::Scale => "always present".to_string(),
             Param::LinearN0 | Param::LinearG => {
                 "a parameter of the analytic n²-linear kind, not of the logistic model".to_string()
+            }
+            Param::Air(_) => {
+                "a parameter of real air (docs/air.md), not of the logistic model".to_string()
             }
         }
     }
@@ -212,8 +220,8 @@ impl<T: Copy> LogisticMedium<T> {
             Param::InversionN => self.inversion.as_ref().map(|i| &i.n),
             Param::InversionA => self.inversion.as_ref().map(|i| &i.a),
             Param::InversionHeight => self.inversion.as_ref().map(|i| &i.height),
-            Param::Hot(j, f) => self.hotspots.get(j).map(|h| h.field(f)),
-            Param::LinearN0 | Param::LinearG => None,
+            Param::Hot(j, f) => self.hotspots.get(j).and_then(|h| h.field(f)),
+            Param::LinearN0 | Param::LinearG | Param::Air(_) => None,
         }
     }
 
@@ -225,31 +233,33 @@ impl<T: Copy> LogisticMedium<T> {
             Param::InversionN => self.inversion.as_mut().map(|i| &mut i.n),
             Param::InversionA => self.inversion.as_mut().map(|i| &mut i.a),
             Param::InversionHeight => self.inversion.as_mut().map(|i| &mut i.height),
-            Param::Hot(j, f) => self.hotspots.get_mut(j).map(|h| h.field_mut(f)),
-            Param::LinearN0 | Param::LinearG => None,
+            Param::Hot(j, f) => self.hotspots.get_mut(j).and_then(|h| h.field_mut(f)),
+            Param::LinearN0 | Param::LinearG | Param::Air(_) => None,
         }
     }
 }
 
 impl<T> HotSpot<T> {
-    fn field(&self, f: HotField) -> &T {
+    fn field(&self, f: HotField) -> Option<&T> {
         match f {
-            HotField::X => &self.x,
-            HotField::Z => &self.z,
-            HotField::Radius => &self.radius,
-            HotField::N => &self.n,
-            HotField::A => &self.a,
-            HotField::Edge => &self.edge,
+            HotField::X => Some(&self.x),
+            HotField::Z => Some(&self.z),
+            HotField::Radius => Some(&self.radius),
+            HotField::N => Some(&self.n),
+            HotField::A => Some(&self.a),
+            HotField::Edge => Some(&self.edge),
+            HotField::Delta | HotField::ScaleHeight => None,
         }
     }
-    fn field_mut(&mut self, f: HotField) -> &mut T {
+    fn field_mut(&mut self, f: HotField) -> Option<&mut T> {
         match f {
-            HotField::X => &mut self.x,
-            HotField::Z => &mut self.z,
-            HotField::Radius => &mut self.radius,
-            HotField::N => &mut self.n,
-            HotField::A => &mut self.a,
-            HotField::Edge => &mut self.edge,
+            HotField::X => Some(&mut self.x),
+            HotField::Z => Some(&mut self.z),
+            HotField::Radius => Some(&mut self.radius),
+            HotField::N => Some(&mut self.n),
+            HotField::A => Some(&mut self.a),
+            HotField::Edge => Some(&mut self.edge),
+            HotField::Delta | HotField::ScaleHeight => None,
         }
     }
 }
@@ -512,26 +522,7 @@ impl<T: Real> IndexField<T> for LogisticField<T> {
             grad.y -= l.amp * ds * l.inv_rate;
         }
         for hs in &self.hotspots {
-            let dx = p.x - hs.x;
-            let dz = p.z - hs.z;
-            // ρ from components scaled by their magnitude: no overflow or
-            // underflow of dx² + dz², and ρ = 0 (the cone tip) handled apart.
-            let big = dx.val().abs().max(dz.val().abs());
-            let (w, dw_drho, ux, uz) = if big == 0.0 || !big.is_finite() {
-                let (w, _) = if big == 0.0 {
-                    sigmoid(hs.edge * hs.radius)
-                } else {
-                    (zero, zero)
-                };
-                (w, zero, zero, zero)
-            } else {
-                let (sx, sz) = (dx * (1.0 / big), dz * (1.0 / big));
-                let unit = (sx * sx + sz * sz).sqrt();
-                let rho = unit * big;
-                // w = 1 − σ(e(ρ − R)) = σ(e(R − ρ)), without the cancellation.
-                let (w, dw) = sigmoid(hs.edge * (hs.radius - rho));
-                (w, -(hs.edge * dw), sx / unit, sz / unit)
-            };
+            let (w, dw_drho, ux, uz) = rim_weight(p.x - hs.x, p.z - hs.z, hs.radius, hs.edge);
             let (s, ds) = sigmoid(p.y * hs.layer.inv_rate);
             let amp_s = hs.layer.amp * s;
             delta += amp_s * w;

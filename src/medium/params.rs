@@ -19,17 +19,43 @@ pub enum HotField {
     A,
     /// Rim sharpness (1/metre).
     Edge,
+    /// Temperature excess at the ground (kelvins): real air's hot spots.
+    Delta,
+    /// Height over which the excess falls by 1/e (metres): real air's hot spots.
+    ScaleHeight,
 }
 
 impl HotField {
-    /// All fields, in the order parameters are listed.
-    pub const ALL: [HotField; 6] = [
+    /// The fields of a logistic hot spot, in the order parameters are listed.
+    pub const LOGISTIC: [HotField; 6] = [
         HotField::X,
         HotField::Z,
         HotField::Radius,
         HotField::N,
         HotField::A,
         HotField::Edge,
+    ];
+
+    /// The fields of a real-air hot spot, in the order parameters are listed.
+    pub const AIR: [HotField; 6] = [
+        HotField::X,
+        HotField::Z,
+        HotField::Radius,
+        HotField::Edge,
+        HotField::Delta,
+        HotField::ScaleHeight,
+    ];
+
+    /// Every field of either kind (for parsing names).
+    pub const ALL: [HotField; 8] = [
+        HotField::X,
+        HotField::Z,
+        HotField::Radius,
+        HotField::N,
+        HotField::A,
+        HotField::Edge,
+        HotField::Delta,
+        HotField::ScaleHeight,
     ];
 
     /// The name used in files.
@@ -41,6 +67,8 @@ impl HotField {
             HotField::N => "n",
             HotField::A => "a",
             HotField::Edge => "edge",
+            HotField::Delta => "delta",
+            HotField::ScaleHeight => "scale_height",
         }
     }
 }
@@ -66,6 +94,104 @@ pub enum Param {
     LinearN0,
     /// `linear_square.g`: d(n²)/dy of the analytic n²-linear kind (per metre).
     LinearG,
+    /// `air.…`: a parameter of real air (`docs/air.md`).
+    Air(AirParam),
+}
+
+/// A parameter of real air's `air` section, by its path below `air.`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum AirParam {
+    /// `temperature.base` (°C).
+    Base,
+    /// `temperature.lapse` (K/m), when it is a number.
+    Lapse,
+    /// `temperature.exponential.delta` (K).
+    ExponentialDelta,
+    /// `temperature.exponential.scale_height` (m).
+    ExponentialScaleHeight,
+    /// `temperature.inversion.delta` (K).
+    InversionDelta,
+    /// `temperature.inversion.height` (m).
+    InversionHeight,
+    /// `temperature.inversion.thickness` (m).
+    InversionThickness,
+    /// `temperature.table[i][0]`: the height of row i (m).
+    TableHeight(usize),
+    /// `temperature.table[i][1]`: the temperature of row i (°C).
+    TableTemperature(usize),
+    /// `pressure` (Pa at h = 0).
+    Pressure,
+    /// `humidity` (relative, 0…1).
+    Humidity,
+    /// `wavelength` (nm, vacuum).
+    Wavelength,
+    /// `co2` (ppm by mole).
+    Co2,
+    /// `refractivity.gladstone_dale`: K of n − 1 = K·(P/101325 Pa)/T (kelvins).
+    GladstoneDale,
+}
+
+impl AirParam {
+    /// The fixed names (every one but the table's).
+    const NAMED: [(AirParam, &'static str); 12] = [
+        (AirParam::Base, "temperature.base"),
+        (AirParam::Lapse, "temperature.lapse"),
+        (AirParam::ExponentialDelta, "temperature.exponential.delta"),
+        (
+            AirParam::ExponentialScaleHeight,
+            "temperature.exponential.scale_height",
+        ),
+        (AirParam::InversionDelta, "temperature.inversion.delta"),
+        (AirParam::InversionHeight, "temperature.inversion.height"),
+        (
+            AirParam::InversionThickness,
+            "temperature.inversion.thickness",
+        ),
+        (AirParam::Pressure, "pressure"),
+        (AirParam::Humidity, "humidity"),
+        (AirParam::Wavelength, "wavelength"),
+        (AirParam::Co2, "co2"),
+        (AirParam::GladstoneDale, "refractivity.gladstone_dale"),
+    ];
+}
+
+impl fmt::Display for AirParam {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AirParam::TableHeight(i) => write!(f, "temperature.table[{i}][0]"),
+            AirParam::TableTemperature(i) => write!(f, "temperature.table[{i}][1]"),
+            named => {
+                let name = AirParam::NAMED
+                    .iter()
+                    .find(|(p, _)| p == named)
+                    .map(|(_, n)| *n)
+                    .unwrap_or("?");
+                f.write_str(name)
+            }
+        }
+    }
+}
+
+impl FromStr for AirParam {
+    type Err = ();
+
+    /// Parses the part after `air.`.
+    fn from_str(s: &str) -> Result<Self, ()> {
+        if let Some((p, _)) = AirParam::NAMED.iter().find(|(_, n)| *n == s) {
+            return Ok(*p);
+        }
+        let rest = s.strip_prefix("temperature.table[").ok_or(())?;
+        let (index, column) = rest.split_once("][").ok_or(())?;
+        if index.is_empty() || !index.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(());
+        }
+        let i: usize = index.parse().map_err(|_| ())?;
+        match column {
+            "0]" => Ok(AirParam::TableHeight(i)),
+            "1]" => Ok(AirParam::TableTemperature(i)),
+            _ => Err(()),
+        }
+    }
 }
 
 impl Param {
@@ -91,6 +217,7 @@ impl fmt::Display for Param {
             Param::Hot(j, field) => write!(f, "hotspots[{j}].{}", field.name()),
             Param::LinearN0 => f.write_str("linear_square.n0"),
             Param::LinearG => f.write_str("linear_square.g"),
+            Param::Air(a) => write!(f, "air.{a}"),
         }
     }
 }
@@ -98,7 +225,7 @@ impl fmt::Display for Param {
 /// A name that is not the path of any parameter of the model.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "`{0}` is not a parameter name (expected e.g. `scale`, `background.a`, `inversion.height`, `hotspots[0].radius`)"
+    "`{0}` is not a parameter name (expected e.g. `scale`, `background.a`, `inversion.height`, `hotspots[0].radius`, `air.temperature.exponential.delta`, `hotspots[0].delta`)"
 )]
 pub struct ParamParseError(pub String);
 
@@ -116,6 +243,9 @@ impl FromStr for Param {
             "inversion.height" => Param::InversionHeight,
             "linear_square.n0" => Param::LinearN0,
             "linear_square.g" => Param::LinearG,
+            _ if s.starts_with("air.") => {
+                Param::Air(s["air.".len()..].parse().map_err(|()| err())?)
+            }
             _ => {
                 let rest = s.strip_prefix("hotspots[").ok_or_else(err)?;
                 let (index, field) = rest.split_once("].").ok_or_else(err)?;
@@ -150,6 +280,9 @@ mod tests {
             Param::LinearG,
         ];
         all.extend(HotField::ALL.map(|f| Param::Hot(12, f)));
+        all.extend(AirParam::NAMED.map(|(a, _)| Param::Air(a)));
+        all.push(Param::Air(AirParam::TableHeight(3)));
+        all.push(Param::Air(AirParam::TableTemperature(17)));
         for p in all {
             assert_eq!(p.to_string().parse::<Param>(), Ok(p));
         }
@@ -167,6 +300,12 @@ mod tests {
             "hotspots[0].colour",
             "hotspots[+1].x",
             "hotspots[99999999999999999999999].x",
+            "air.",
+            "air.temperature",
+            "air.temperature.table[1][2]",
+            "air.temperature.table[][1]",
+            "air.temperature.table[1]",
+            "air.Pressure",
         ] {
             assert!(bad.parse::<Param>().is_err(), "{bad:?} accepted");
         }

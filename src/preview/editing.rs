@@ -42,7 +42,12 @@ pub fn slider_range(p: Param, start: f64, bounds: Option<(f64, f64)>) -> (f64, f
         }
         Param::Hot(_, HotField::Radius) => (0.0, (4.0 * m).max(100.0)),
         Param::Hot(_, HotField::Edge) => (0.01, (4.0 * m).max(20.0)),
-        Param::LinearN0 | Param::LinearG => (start - (m.max(1e-6)), start + m.max(1e-6)),
+        Param::LinearN0
+        | Param::LinearG
+        | Param::Air(_)
+        | Param::Hot(_, HotField::Delta | HotField::ScaleHeight) => {
+            (start - (m.max(1e-6)), start + m.max(1e-6))
+        }
     };
     (lo.min(start), hi.max(start))
 }

@@ -93,6 +93,9 @@ pub enum End {
     MaxLength,
     /// The step limit was hit, or the adaptive step underflowed.
     StepLimit,
+    /// It rose past the medium's ceiling into air colder than −150 °C (real
+    /// air with a steep lapse), where no refractivity formula holds.
+    LeftAir,
 }
 
 /// Integration statistics of one trace.

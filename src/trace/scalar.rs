@@ -28,6 +28,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
         (None, None) => f64::INFINITY,
     };
     let mut stats = Stats::default();
+    let ceiling = field.ceiling();
     let x0 = origin.lift::<T>();
     let (delta0, _) = field.delta_gradient(x0);
     let mut y = RayState {
@@ -70,6 +71,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
             );
         }
         steps += 1;
+        stepper.limit(field.step_limit(y.x.y.val(), y.v.y.val()));
         let (y1, f1, h) = match stepper.attempt(field, &y, &f, &mut stats.rhs_evaluations) {
             Attempt::Accepted(y1, f1, h) => (y1, f1, h),
             Attempt::Rejected => {
@@ -101,6 +103,9 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
             p.push(real.y1);
         }
 
+        if real.y1.x.y > ceiling {
+            return finish(y1.x, real.y1.v, real.y1.s, End::LeftAir, occluded, stats);
+        }
         let d = plane_distance(y1.x).abs();
         if d < nearest.0 {
             nearest = (d, y1);

@@ -138,6 +138,18 @@ impl Stepper {
     }
 
     /// Attempts one step from `y` (whose rate is `f0`).
+    /// Caps the next adaptive step at `cap` (τ units); RK4 keeps its step.
+    /// The medium asks for it ([`IndexField::step_limit`]) so that a long
+    /// step cannot leap over a thin layer that none of its stages samples.
+    #[inline]
+    pub(crate) fn limit(&mut self, cap: f64) {
+        if let Stepper::Dopri5 { h, .. } = self
+            && *h > cap
+        {
+            *h = cap;
+        }
+    }
+
     #[inline]
     pub(crate) fn attempt<T: Real, F: IndexField<T> + ?Sized>(
         &mut self,

@@ -103,7 +103,7 @@ pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Ve
 pub fn trace_batch_into(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
     match field {
         Field::Logistic(field) => trace_logistic(field, jobs, options, out),
-        Field::LinearSquare(_) => trace_scalar(field, jobs, options, out),
+        Field::LinearSquare(_) | Field::Air(_) => trace_scalar(field, jobs, options, out),
     }
 }
 

@@ -1,0 +1,421 @@
+//! Real air compiled for evaluation: δ = n − 1 and ∇δ at a point.
+//!
+//! ```text
+//! T(p)  = T_u(h) + Σ_j δT_j · w_j(x, z) · e^(−h⁺/H_j)          (h⁺ = max(h, 0))
+//! P(h)  = P₀ · exp(−(gM/R) ∫₀^h dh'/T_u(h'))   (hydrostatic; else P₀)
+//! δ     = f(T, P; humidity, λ, CO₂)               (Ciddor, Edlén or Gladstone–Dale)
+//! ∇δ    = ∂f/∂T · ∇T + ∂f/∂P · (dP/dh) ŷ
+//! ```
+//!
+//! T_u is the horizontally uniform profile (analytic terms or the table's
+//! shape-preserving cubic); the pressure follows it alone, as the contract
+//! says (hot spots do not change the pressure). ∂f/∂T and ∂f/∂P come exactly
+//! from the formula (`refractivity::refractivity_partials`), dP/dh from the
+//! hydrostatic law at the point's own T_u, so ∇δ is the analytic gradient of δ.
+//!
+//! Below the ground (rays integrated through it) the surface terms are held
+//! at their ground value, which keeps every value finite for any finite point;
+//! above the height where the uniform air falls below −150 °C (a steep lapse
+//! far up) the medium is not air: [`AirField::ceiling`] gives that height and
+//! the tracers stop there (`End::LeftAir`), and δ is evaluated with the
+//! temperature held at that floor so that it stays finite.
+
+use super::hydrostatic::{Hydrostatic, MAX_SPACING};
+use super::model::{AirMedium, DEFAULT_BASE, Lapse};
+use super::pchip::Pchip;
+use super::refractivity::{AirState, Formula, STANDARD_PRESSURE, refractivity_partials};
+use super::standard::{US1976_BREAKS, US1976_TOP, us1976_offset};
+use crate::math::{Real, V3, sigmoid};
+use crate::medium::IndexField;
+use crate::medium::rim::rim_weight;
+
+/// 0 °C in kelvins.
+pub const KELVIN: f64 = 273.15;
+/// The coldest air the formulas are asked about (°C): the contract's floor.
+pub const COLDEST: f64 = -150.0;
+/// Where the hydrostatic table starts (m below the ground: rays dip under it
+/// by a step at most).
+const TABLE_BOTTOM: f64 = -200.0;
+
+/// The horizontally uniform temperature, compiled.
+#[derive(Clone, Debug)]
+enum Profile<T> {
+    /// Analytic terms: base (K), lapse, surface layer, step aloft.
+    Terms {
+        kelvin0: T,
+        lapse: Option<Lapse<T>>,
+        /// (δT, 1/H).
+        exponential: Option<(T, T)>,
+        /// (δT, height, 1/thickness).
+        inversion: Option<(T, T, T)>,
+    },
+    /// A measured table (°C), interpolated.
+    Table(Pchip<T>),
+}
+
+impl<T: Real> Profile<T> {
+    /// (T_u in kelvins, dT_u/dh) at height h.
+    #[inline]
+    fn kelvin(&self, h: T) -> (T, T) {
+        match self {
+            Profile::Terms {
+                kelvin0,
+                lapse,
+                exponential,
+                inversion,
+            } => {
+                let mut t = *kelvin0;
+                let mut d = T::cst(0.0);
+                match lapse {
+                    Some(Lapse::Rate(r)) => {
+                        t += *r * h;
+                        d += *r;
+                    }
+                    Some(Lapse::Standard) => {
+                        let (o, od) = us1976_offset(h);
+                        t += o;
+                        d += od;
+                    }
+                    None => {}
+                }
+                if let Some((delta, inv_h)) = exponential {
+                    if h.val() > 0.0 {
+                        let e = (-(h * *inv_h)).exp();
+                        t += *delta * e;
+                        d -= *delta * *inv_h * e;
+                    } else {
+                        t += *delta;
+                    }
+                }
+                if let Some((delta, height, inv_th)) = inversion {
+                    let (s, ds) = sigmoid((h - *height) * *inv_th);
+                    t += *delta * s;
+                    d += *delta * ds * *inv_th;
+                }
+                (t, d)
+            }
+            Profile::Table(p) => {
+                let (v, dv) = p.eval(h);
+                (v + KELVIN, dv)
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Pressure<T> {
+    Constant(T),
+    Hydrostatic(Hydrostatic<T>),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct HotTerm<T> {
+    x: T,
+    z: T,
+    radius: T,
+    edge: T,
+    delta: T,
+    inv_scale: T,
+}
+
+/// Real air compiled for evaluation (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct AirField<T = f64> {
+    profile: Profile<T>,
+    pressure: Pressure<T>,
+    formula: Formula<T>,
+    humidity: T,
+    wavelength: T,
+    co2: T,
+    hotspots: Vec<HotTerm<T>>,
+    ceiling: f64,
+    /// The thin layers as height zones `(lo, hi, scale)`: outside them the
+    /// layer's share of T is below 1e-13 of its amplitude.
+    zones: Vec<(f64, f64, f64)>,
+}
+
+/// How many scales a layer's zone reaches (e^(−30) ≈ 1e-13).
+const ZONE_SCALES: f64 = 30.0;
+/// How many scales of height a step may cover inside a zone.
+const ZONE_STEP_SCALES: f64 = 4.0;
+
+impl<T: Real> AirField<T> {
+    /// Compiles a medium (validated or not: an invalid medium gives non-finite
+    /// values, which callers treat as a failed evaluation).
+    pub fn new(m: &AirMedium<T>) -> Self {
+        let t = &m.air.temperature;
+        let profile = match &t.table {
+            Some(rows) if !t.has_analytic_terms() => {
+                let rows: Vec<(T, T)> = rows.iter().map(|r| (r[0], r[1])).collect();
+                Profile::Table(Pchip::new(&rows))
+            }
+            _ => Profile::Terms {
+                kelvin0: t.base.unwrap_or(T::cst(DEFAULT_BASE)) + KELVIN,
+                lapse: t.lapse,
+                exponential: t.exponential.map(|e| (e.delta, e.scale_height.recip())),
+                inversion: t
+                    .inversion
+                    .map(|i| (i.delta, i.height, i.thickness.recip())),
+            },
+        };
+        let pressure = if m.air.hydrostatic {
+            let scales = feature_scales(m);
+            let top = table_top(m);
+            let p = profile.clone();
+            Pressure::Hydrostatic(Hydrostatic::new(
+                m.air.pressure,
+                move |h| p.kelvin(h),
+                TABLE_BOTTOM,
+                top,
+                &scales,
+            ))
+        } else {
+            Pressure::Constant(m.air.pressure)
+        };
+        let hotspots: Vec<HotTerm<T>> = m
+            .hotspots
+            .iter()
+            .map(|h| HotTerm {
+                x: h.x,
+                z: h.z,
+                radius: h.radius,
+                edge: h.edge,
+                delta: h.delta,
+                inv_scale: h.scale_height.recip(),
+            })
+            .collect();
+        let ceiling = ceiling(&profile, &hotspots);
+        let zones = zones(m);
+        AirField {
+            profile,
+            pressure,
+            formula: m.air.refractivity,
+            humidity: m.air.humidity,
+            wavelength: m.air.wavelength,
+            co2: m.air.co2,
+            hotspots,
+            ceiling,
+            zones,
+        }
+    }
+
+    /// The height (m) above which the air is colder than −150 °C somewhere
+    /// (infinite when it never is): the tracers stop rays there.
+    pub fn ceiling(&self) -> f64 {
+        self.ceiling
+    }
+
+    /// The horizontally uniform temperature (K) and its height derivative at h.
+    pub fn uniform_kelvin(&self, h: T) -> (T, T) {
+        self.profile.kelvin(h)
+    }
+
+    /// The pressure (Pa) and its height derivative at h.
+    pub fn pressure(&self, h: T) -> (T, T) {
+        match &self.pressure {
+            Pressure::Constant(p) => (*p, T::cst(0.0)),
+            Pressure::Hydrostatic(table) => table.eval(h, self.profile.kelvin(h).0),
+        }
+    }
+
+    /// The temperature (K) at p and its gradient.
+    pub fn kelvin(&self, p: V3<T>) -> (T, V3<T>) {
+        let (tu, dtu) = self.profile.kelvin(p.y);
+        let zero = T::cst(0.0);
+        let mut t = tu;
+        let mut grad = V3::new(zero, dtu, zero);
+        for hs in &self.hotspots {
+            let (w, dw_drho, ux, uz) = rim_weight(p.x - hs.x, p.z - hs.z, hs.radius, hs.edge);
+            let (e, de) = if p.y.val() > 0.0 {
+                let e = (-(p.y * hs.inv_scale)).exp();
+                (e, -(e * hs.inv_scale))
+            } else {
+                (T::cst(1.0), zero)
+            };
+            let amp = hs.delta * e;
+            t += amp * w;
+            grad.y += hs.delta * w * de;
+            grad.x += amp * dw_drho * ux;
+            grad.z += amp * dw_drho * uz;
+        }
+        (t, grad)
+    }
+}
+
+impl<T: Real> IndexField<T> for AirField<T> {
+    #[inline]
+    fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
+        let (t, grad_t) = self.kelvin(p);
+        let (pressure, dp_dh) = self.pressure(p.y);
+        // Past the ceiling the tracers stop; hold the floor so δ stays finite.
+        let floor = COLDEST + KELVIN;
+        let (t, grad_t) = if t.val() < floor {
+            let z = T::cst(0.0);
+            (T::cst(floor), V3::new(z, z, z))
+        } else {
+            (t, grad_t)
+        };
+        let state = AirState {
+            celsius: t - KELVIN,
+            pressure,
+            humidity: self.humidity,
+            wavelength_nm: self.wavelength,
+            co2_ppm: self.co2,
+        };
+        let (delta, d_dt, d_dp) = match self.formula {
+            // δ = K·(P/P₀)/T: its partials in closed form (the tracer's hot
+            // path for the many mirage papers that use this law).
+            Formula::GladstoneDale(k) => {
+                let d = k * (pressure * (1.0 / STANDARD_PRESSURE)) / t;
+                (d, -(d / t), d / pressure)
+            }
+            formula => refractivity_partials(formula, &state),
+        };
+        let grad = V3::new(
+            d_dt * grad_t.x,
+            d_dt * grad_t.y + d_dp * dp_dh,
+            d_dt * grad_t.z,
+        );
+        (delta, grad)
+    }
+
+    fn is_stratified(&self) -> bool {
+        self.hotspots.is_empty()
+    }
+
+    fn ceiling(&self) -> f64 {
+        self.ceiling
+    }
+
+    fn step_limit(&self, y: f64, vy: f64) -> f64 {
+        // Heading for a zone from outside: reach it, and a few scales into it;
+        // inside one, at most a few scales a step toward its core (a surface
+        // layer's core is the ground: rising out of it is not limited).
+        let mut cap = f64::INFINITY;
+        for &(lo, hi, s) in &self.zones {
+            let reach = ZONE_STEP_SCALES * s;
+            let limit = if y > hi && vy < 0.0 {
+                (y - hi + reach) / -vy
+            } else if y < lo && vy > 0.0 {
+                (lo - y + reach) / vy
+            } else if (lo..=hi).contains(&y) && (lo.is_finite() || vy < 0.0) {
+                reach / vy.abs()
+            } else {
+                continue;
+            };
+            cap = cap.min(limit);
+        }
+        cap
+    }
+}
+
+/// The thin layers' zones (see [`AirField::step_limit`]).
+fn zones<T: Real>(m: &AirMedium<T>) -> Vec<(f64, f64, f64)> {
+    let t = &m.air.temperature;
+    let mut out = Vec::new();
+    if let Some(e) = t.exponential {
+        let s = e.scale_height.val().abs();
+        out.push((f64::NEG_INFINITY, ZONE_SCALES * s, s));
+    }
+    if let Some(i) = t.inversion {
+        let (c, s) = (i.height.val(), i.thickness.val().abs());
+        out.push((c - ZONE_SCALES * s, c + ZONE_SCALES * s, s));
+    }
+    if let Some(rows) = &t.table
+        && let (Some(first), Some(last)) = (rows.first(), rows.last())
+    {
+        let gap = rows
+            .windows(2)
+            .map(|w| (w[1][0].val() - w[0][0].val()).abs())
+            .fold(f64::INFINITY, f64::min);
+        out.push((first[0].val() - gap, last[0].val() + gap, gap));
+    }
+    for h in &m.hotspots {
+        let s = h.scale_height.val().abs();
+        out.push((f64::NEG_INFINITY, ZONE_SCALES * s, s));
+    }
+    out.retain(|(lo, hi, s)| !lo.is_nan() && hi.is_finite() && s.is_finite() && *s > 0.0);
+    out
+}
+
+/// The profile's sharp features as (centre, scale) pairs, for the hydrostatic
+/// table's node spacing.
+pub(super) fn feature_scales<T: Real>(m: &AirMedium<T>) -> Vec<(f64, f64)> {
+    let t = &m.air.temperature;
+    let mut out = Vec::new();
+    if let Some(Lapse::Standard) = t.lapse {
+        // The layers' kinks become nodes, without refining the spacing.
+        out.extend(US1976_BREAKS.iter().map(|&b| (b, 8.0 * MAX_SPACING)));
+    }
+    if let Some(e) = t.exponential {
+        out.push((0.0, e.scale_height.val().abs()));
+    }
+    if let Some(i) = t.inversion {
+        out.push((i.height.val(), i.thickness.val().abs()));
+    }
+    if let Some(rows) = &t.table {
+        for w in rows.windows(2) {
+            let gap = (w[1][0].val() - w[0][0].val()).abs();
+            out.push((w[0][0].val(), gap.max(1e-3)));
+        }
+    }
+    out.retain(|(c, s)| c.is_finite() && s.is_finite() && *s > 0.0);
+    out
+}
+
+/// The top of the hydrostatic table: the US 1976 layers' top, above every
+/// feature and table row.
+fn table_top<T: Real>(m: &AirMedium<T>) -> f64 {
+    let t = &m.air.temperature;
+    let mut top = US1976_TOP;
+    if let Some(i) = t.inversion {
+        top = top.max(i.height.val() + 40.0 * i.thickness.val().abs());
+    }
+    if let Some(rows) = &t.table
+        && let Some(last) = rows.last()
+    {
+        top = top.max(last[0].val());
+    }
+    if top.is_finite() { top } else { US1976_TOP }
+}
+
+/// The lowest height (m, ≥ 0) where the uniform profile with the coldest
+/// hot-spot excesses falls below −150 °C, scanned every 50 m up to the table
+/// top and then far beyond (a lapse keeps falling); infinite if never.
+fn ceiling<T: Real>(profile: &Profile<T>, hotspots: &[HotTerm<T>]) -> f64 {
+    let floor = COLDEST + KELVIN;
+    let cold = |h: f64| -> f64 {
+        let (tu, _) = profile.kelvin(T::cst(h));
+        let spots: f64 = hotspots
+            .iter()
+            .map(|s| s.delta.val().min(0.0) * (-(h.max(0.0)) * s.inv_scale.val()).exp())
+            .sum();
+        tu.val() + spots
+    };
+    let mut h = 0.0;
+    let mut step = 50.0;
+    while h < 1e9 {
+        let t = cold(h);
+        if t.is_nan() || t < floor {
+            // Refine between the last good height and this one.
+            let (mut lo, mut hi) = ((h - step).max(0.0), h);
+            if h == 0.0 {
+                return 0.0;
+            }
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if cold(mid) >= floor {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            return lo;
+        }
+        if h >= 100_000.0 {
+            step = h;
+        }
+        h += step;
+    }
+    f64::INFINITY
+}
