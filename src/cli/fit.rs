@@ -118,9 +118,17 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
         r.totals.max_distance
     );
     if !r.parameters.is_empty() {
+        // Real air's paths run to 40 characters: the column fits the longest.
+        let w = r
+            .parameters
+            .iter()
+            .map(|p| p.name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(24);
         let _ = writeln!(
             s,
-            "{:<24} {:>14} {:>16} {:>12}",
+            "{:<w$} {:>14} {:>16} {:>12}",
             "parameter", "start", "fitted", "std. error"
         );
         for p in &r.parameters {
@@ -130,7 +138,7 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
             };
             let _ = writeln!(
                 s,
-                "{:<24} {:>14.6} {:>16.9} {:>12}{}",
+                "{:<w$} {:>14.6} {:>16.9} {:>12}{}",
                 p.name,
                 p.start,
                 p.value,

@@ -266,8 +266,10 @@ impl<T: Real> IndexField<T> for AirField<T> {
             // δ = K·(P/P₀)/T: its partials in closed form (the tracer's hot
             // path for the many mirage papers that use this law).
             Formula::GladstoneDale(k) => {
-                let d = k * (pressure * (1.0 / STANDARD_PRESSURE)) / t;
-                (d, -(d / t), d / pressure)
+                let inv_t = t.recip();
+                let d_dp = k * (1.0 / STANDARD_PRESSURE) * inv_t;
+                let d = d_dp * pressure;
+                (d, -(d * inv_t), d_dp)
             }
             formula => refractivity_partials(formula, &state),
         };
