@@ -327,11 +327,13 @@ fn warnings(rows: &[ProfileRow]) -> Vec<Warning> {
                 .then_some(r.temperature_c)
         }),
         ("too_hot", |r| {
-            (!(r.temperature_c <= HOTTEST_PLAUSIBLE) || r.temperature_c < -KELVIN)
+            (r.temperature_c > HOTTEST_PLAUSIBLE
+                || r.temperature_c.is_nan()
+                || r.temperature_c < -KELVIN)
                 .then_some(r.temperature_c)
         }),
         ("too_steep", |r| {
-            (!(r.dt_dh.abs() <= STEEPEST_PLAUSIBLE)).then_some(r.dt_dh)
+            (r.dt_dh.abs() > STEEPEST_PLAUSIBLE || r.dt_dh.is_nan()).then_some(r.dt_dh)
         }),
     ];
     let mut out = Vec::new();

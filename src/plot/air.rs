@@ -15,6 +15,9 @@ use plotters::prelude::*;
 use std::path::Path;
 
 const SIZE: (u32, u32) = (1600, 640);
+
+/// A panel: caption, x axis label, (x, h) points.
+type Panel<'a> = (&'a str, &'a str, Vec<(f64, f64)>);
 const HEADER: u32 = 74;
 const Y_LABEL_AREA: u32 = 74;
 
@@ -48,7 +51,7 @@ impl Figure for AirFigure<'_> {
         } else {
             "temperature"
         };
-        let series: [(&str, &str, Vec<(f64, f64)>); 4] = [
+        let series: [Panel; 4] = [
             (
                 t_caption,
                 "T (°C)",
