@@ -18,6 +18,7 @@ pub mod plot;
 #[cfg(feature = "preview")]
 pub mod preview;
 pub mod problem;
+pub mod profile;
 pub mod render;
 pub mod scene;
 pub mod trace;

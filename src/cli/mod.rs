@@ -6,6 +6,7 @@
 //! by the command and reported as [`Error::Usage`]. A value a parser refuses is
 //! reported like a usage error, one line naming the flag ([`parse_error`]).
 
+pub mod air;
 pub mod compare;
 pub mod fit;
 #[cfg(feature = "preview")]
@@ -56,6 +57,8 @@ pub enum Command {
     Sky(sky::SkyOptions),
     /// Print n − 1 of air at a temperature, pressure, humidity and wavelength.
     Refractivity(refractivity::RefractivityOptions),
+    /// Write and draw a medium's T, P, n − 1 and dn/dh against height (implied air for a logistic medium).
+    Air(air::AirOptions),
     /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
     #[cfg(feature = "preview")]
     Preview(preview::PreviewOptions),
@@ -89,6 +92,7 @@ impl Cli {
             Command::Compare(o) => compare::run(o),
             Command::Sky(o) => sky::run(o),
             Command::Refractivity(o) => refractivity::run(o).map(|_| ()),
+            Command::Air(o) => air::run(o).map(|_| ()),
             #[cfg(feature = "preview")]
             Command::Preview(o) => preview::run(o),
         }

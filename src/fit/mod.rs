@@ -62,6 +62,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
         })
         .collect();
     let best = &solution.runs[solution.best_run];
+    let implied_air = crate::profile::implied_air_summary(&medium);
     let report = FitReport {
         problem: problem.name.clone(),
         medium,
@@ -101,6 +102,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
             runs: solution.runs.into_iter().map(|r| r.history).collect(),
         },
         trace: problem.trace_spec.clone(),
+        implied_air,
     };
     Ok(report)
 }

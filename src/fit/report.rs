@@ -98,4 +98,8 @@ pub struct FitReport {
     pub history: crate::fit::History,
     /// Trace settings used.
     pub trace: TraceSpec,
+    /// For a medium that is not real air: the air that makes the same mirage
+    /// (`crate::profile`, as `mirage air` reports it), in brief.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub implied_air: Option<crate::profile::ImpliedAirSummary>,
 }

@@ -2,6 +2,7 @@
 //!
 //! - [`draw_rays`]: the ray diagram of a problem (side view of every pair's ray
 //!   beside the refractivity profile δ(y)).
+//! - [`draw_air`]: a medium's T, P, n − 1 and dn/dh against height (`mirage air`).
 //! - [`draw_convergence`]: how a fit's objective and parameters moved.
 //! - [`draw_tradeoff`]: the speed/accuracy trade of the integrators.
 //!
@@ -11,6 +12,7 @@
 //! figure is rendered in memory and written with [`crate::io::write_atomic`]: a
 //! failed plot never leaves a partial file.
 
+mod air;
 mod axes;
 mod convergence;
 mod figure;
@@ -24,6 +26,7 @@ mod tradeoff;
 #[cfg(test)]
 mod tests;
 
+pub use air::draw_air;
 pub use convergence::draw_convergence;
 pub use figure::ImageFormat;
 pub use rays::draw_rays;

@@ -1,5 +1,6 @@
 //! The ray diagram of a problem: every pair's traced ray in side view, beside
-//! the refractivity profile δ(y) that bends it.
+//! the refractivity profile δ(y) that bends it, and for real air beside the
+//! temperature T(h) that makes that δ (a panel of its own, on the same heights).
 
 use super::axes::{Axes, Span, build_chart, draw_axes, format_sig, pixel_mapper};
 use super::figure::{Figure, draw_header, draw_placeholder, save};
@@ -10,7 +11,8 @@ use super::text::TextMode;
 use crate::error::Result;
 use crate::evaluate::pair_report;
 use crate::math::V3;
-use crate::medium::{IndexField, Medium};
+use crate::medium::air::KELVIN;
+use crate::medium::{Field, IndexField, Medium};
 use crate::problem::Problem;
 use crate::trace::RayState;
 use plotters::coord::Shift;
@@ -20,6 +22,8 @@ use std::path::Path;
 const SIZE: (u32, u32) = (1400, 700);
 /// Share of the width given to the side view; the profile gets the rest.
 const SIDE_SHARE: f64 = 0.72;
+/// The same with a temperature panel beside the δ panel (real air).
+const SIDE_SHARE_AIR: f64 = 0.56;
 /// Heights sampled for the profile curves.
 const PROFILE_SAMPLES: usize = 400;
 
@@ -92,9 +96,13 @@ struct RayFigure {
     pairs: Vec<PairView>,
     bands: Vec<HotBand>,
     profiles: Vec<Profile>,
+    /// T(h) curves (°C, y) on the same columns as `profiles`; real air only.
+    temperatures: Vec<Profile>,
     x: (f64, f64),
     y: (f64, f64),
     delta: (f64, f64),
+    /// The range of `temperatures` (°C).
+    temperature: (f64, f64),
 }
 
 /// Unit horizontal direction from `origin` toward `target` (the target plane's
@@ -320,15 +328,20 @@ impl RayFigure {
                 .filter(|p| p.0.is_finite())
                 .collect()
         };
+        let air = match &field {
+            Field::Air(f) => Some(f),
+            _ => None,
+        };
+        let quantity = if air.is_some() { "δ and T" } else { "δ" };
         let mut profiles = vec![Profile {
-            label: format!("δ {where_}"),
+            label: format!("{quantity} {where_}"),
             color: INK,
             dashed: false,
             points: column(px, pz),
         }];
         for (j, h) in medium.envelope().patches.iter().enumerate() {
             profiles.push(Profile {
-                label: format!("δ over hotspots[{j}]"),
+                label: format!("{quantity} over hotspots[{j}]"),
                 color: hot_color(j),
                 dashed: true,
                 points: column(h.x, h.z),
@@ -346,6 +359,32 @@ impl RayFigure {
         }
         let delta = ds.padded(0.06, (-1.0, 1.0));
 
+        // T(h) on the same columns, for real air.
+        let mut temperatures = Vec::new();
+        if let Some(f) = air {
+            let mut columns = vec![(px, pz)];
+            columns.extend(medium.envelope().patches.iter().map(|h| (h.x, h.z)));
+            for (p, (cx, cz)) in profiles.iter().zip(columns) {
+                temperatures.push(Profile {
+                    label: p.label.clone(),
+                    color: p.color,
+                    dashed: p.dashed,
+                    points: heights
+                        .iter()
+                        .map(|&h| (f.kelvin(V3::new(cx, h, cz)).0 - KELVIN, h))
+                        .filter(|q| q.0.is_finite())
+                        .collect(),
+                });
+            }
+        }
+        let mut ts = Span::EMPTY;
+        for p in &temperatures {
+            for q in &p.points {
+                ts.include(q.0);
+            }
+        }
+        let temperature = ts.padded(0.06, (0.0, 30.0));
+
         let mut method = describe_method(problem);
         if !pairs.is_empty() {
             method.push_str(&format!(
@@ -359,9 +398,11 @@ impl RayFigure {
             pairs,
             bands,
             profiles,
+            temperatures,
             x,
             y,
             delta,
+            temperature,
         }
     }
 
@@ -435,7 +476,12 @@ impl Figure for RayFigure {
     ) -> DrawResult<DB> {
         let (header, body) = root.split_vertically(HEADER);
         let (w, body_h) = body.dim_in_pixel();
-        let side_w = (w as f64 * SIDE_SHARE).round() as u32;
+        let share = if self.temperatures.is_empty() {
+            SIDE_SHARE
+        } else {
+            SIDE_SHARE_AIR
+        };
+        let side_w = (w as f64 * share).round() as u32;
         let side_legend = self.side_legend();
         let profile_legend = self.profile_legend();
         // Legends go in a strip under the panels, where they cannot hide data.
@@ -450,7 +496,20 @@ impl Figure for RayFigure {
         let (side_legend_area, profile_legend_area) = legends.split_horizontally(side_w);
 
         let scale_note = self.draw_side(&side_area, mode)?;
-        self.draw_profile(&profile_area, mode)?;
+        if self.temperatures.is_empty() {
+            self.draw_profile(&profile_area, mode)?;
+        } else {
+            let (pw, _) = profile_area.dim_in_pixel();
+            let (delta_area, t_area) = profile_area.split_horizontally(pw / 2);
+            self.draw_profile(&delta_area, mode)?;
+            self.draw_curves(
+                &t_area,
+                &self.temperatures,
+                self.temperature,
+                ("temperature", "T (°C)"),
+                mode,
+            )?;
+        }
         let indent = |label_area: u32| (label_area + 6) as i32;
         draw_legend(
             &side_legend_area,
@@ -580,14 +639,33 @@ impl RayFigure {
         area: &DrawingArea<DB, Shift>,
         mode: TextMode,
     ) -> DrawResult<DB> {
-        let (d, y) = (self.delta, self.y);
+        self.draw_curves(
+            area,
+            &self.profiles,
+            self.delta,
+            ("refractivity profile", "δ × 10⁶"),
+            mode,
+        )
+    }
+
+    /// Draws height profiles (`curves`, x in `d`) against the side view's
+    /// heights, with a `(caption, x axis label)`.
+    fn draw_curves<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        curves: &[Profile],
+        d: (f64, f64),
+        (caption, x_desc): (&str, &str),
+        mode: TextMode,
+    ) -> DrawResult<DB> {
+        let y = self.y;
         let mut chart = build_chart(area, d, y, PROFILE_Y_LABEL_AREA)?;
         draw_axes(
             area,
             &mut chart,
             &Axes {
-                caption: "refractivity profile",
-                x_desc: "δ × 10⁶",
+                caption,
+                x_desc,
                 y_desc: "height (m)",
                 x_ticks: 5,
                 y_ticks: 8,
@@ -621,7 +699,7 @@ impl RayFigure {
         let pixels = plot.strip_coord_spec();
         // Hot spot curves on top of the origin curve would hide it where they
         // coincide (high above the ground), so the dashed ones go first.
-        for p in self.profiles.iter().rev() {
+        for p in curves.iter().rev() {
             if p.dashed {
                 let pts: Vec<(i32, i32)> = p.points.iter().map(|&q| px(q)).collect();
                 draw_dashed(&pixels, &pts, p.color.stroke_width(2), 9.0, 6.0)?;
