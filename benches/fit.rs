@@ -34,6 +34,7 @@ fn fifteen_pair_problem() -> Problem {
             through: t,
             target: t,
             weight: 1.0,
+            wavelength: None,
         }
     })
     .collect();

@@ -2,7 +2,7 @@
 //! residual and flags, and the totals F, summed and largest distance. This is
 //! what `mirage trace` writes and what a fit result reports at its end point.
 
-use crate::medium::{IndexField, Medium};
+use crate::medium::{IndexField, Medium, PairFields};
 use crate::problem::{Problem, TraceSpec};
 use crate::trace::{End, RayState, Stats};
 use serde::Serialize;
@@ -63,15 +63,18 @@ pub struct TraceReport {
 }
 
 /// Traces every pair of `problem` through `medium` and reports endpoints,
-/// distances, flags and totals. Pairs are traced in parallel; the result does
+/// distances, flags and totals. A pair with its own `wavelength` is traced
+/// through `medium` at that wavelength (one compiled field per distinct
+/// wavelength, [`PairFields`]). Pairs are traced in parallel; the result does
 /// not depend on the number of threads.
 pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
     use rayon::prelude::*;
-    let field = medium.field();
+    let fields = pair_fields(problem, medium);
     let pairs: Vec<PairReport> = problem
         .pairs
         .par_iter()
-        .map(|pair| pair_report(pair, &field, &problem.trace, None))
+        .enumerate()
+        .map(|(i, pair)| pair_report(pair, fields.of(i), &problem.trace, None))
         .collect();
     let mut totals = Totals::default();
     let mut stats = Stats::default();
@@ -89,6 +92,12 @@ pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
         pairs,
         stats,
     }
+}
+
+/// The fields `problem`'s pairs are traced through at `medium`: one per
+/// distinct pair wavelength.
+pub fn pair_fields(problem: &Problem, medium: &Medium) -> PairFields {
+    PairFields::new(medium, problem.pairs.iter().map(|p| p.wavelength))
 }
 
 /// Traces one pair (optionally recording its path).

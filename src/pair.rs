@@ -4,6 +4,7 @@
 use crate::error::FieldError;
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
+use crate::medium::air::WAVELENGTH_RANGE;
 use crate::trace::batch::RayJob;
 use crate::trace::{RayState, TargetPlane, Trace, TraceOptions, trace};
 use serde::{Deserialize, Serialize};
@@ -21,6 +22,11 @@ pub struct PointPair {
     /// Weight of this pair's residual (default 1).
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub weight: f64,
+    /// The vacuum wavelength (nm) this pair is seen at, replacing the
+    /// medium's `air.wavelength` for this pair only (real air only; absent:
+    /// the medium's own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wavelength: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -32,7 +38,9 @@ fn is_one(w: &f64) -> bool {
 
 impl PointPair {
     /// Checks the pair's geometry: finite coordinates, `through` ≠ `origin`, the
-    /// target not straight above or below the origin, a non-negative weight.
+    /// target not straight above or below the origin, a non-negative weight,
+    /// a wavelength (if any) in [`WAVELENGTH_RANGE`]. Whether the medium has
+    /// a wavelength at all is the problem's check.
     pub fn validate(&self) -> Result<(), FieldError> {
         for (name, v) in [
             ("origin", self.origin),
@@ -51,6 +59,17 @@ impl PointPair {
                 "weight",
                 format!("must be a finite number ≥ 0, got {}", self.weight),
             ));
+        }
+        if let Some(nm) = self.wavelength {
+            let (lo, hi) = WAVELENGTH_RANGE;
+            if !(lo..=hi).contains(&nm) {
+                return Err(FieldError::new(
+                    "wavelength",
+                    format!(
+                        "the vacuum wavelength must lie in {lo}…{hi} nm (the refractivity formulas' range), got {nm}"
+                    ),
+                ));
+            }
         }
         let o = V3::from(self.origin);
         if (V3::from(self.through) - o).norm() == 0.0 {

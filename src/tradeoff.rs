@@ -110,7 +110,7 @@ pub fn measure(problem: &Problem, fit: bool) -> Result<Tradeoff> {
     } else {
         None
     };
-    let field = problem.medium.field();
+    let fields = crate::evaluate::pair_fields(problem, &problem.medium);
     let methods = RK4_STEPS.iter().map(|&step| Method::Rk4 { step }).chain(
         TOLERANCES
             .iter()
@@ -132,8 +132,8 @@ pub fn measure(problem: &Problem, fit: bool) -> Result<Tradeoff> {
             })
             .fold(0.0, f64::max);
         let trace_time_s = time_it(Duration::from_millis(60), || {
-            for pair in &p.pairs {
-                std::hint::black_box(pair.evaluate::<f64, _>(&field, &p.trace, None));
+            for (i, pair) in p.pairs.iter().enumerate() {
+                std::hint::black_box(pair.evaluate::<f64, _>(fields.of(i), &p.trace, None));
             }
         });
         let rhs_per_ray = report.stats.rhs_evaluations as f64 / p.pairs.len().max(1) as f64;

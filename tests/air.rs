@@ -129,6 +129,7 @@ fn wigner_pair(angle_deg: f64, y_target: f64) -> PointPair {
         through: [0.0, 1.1 + drop, 3000.0],
         target: [0.0, y_target, 3000.0],
         weight: 1.0,
+        wavelength: None,
     }
 }
 
@@ -265,6 +266,7 @@ fn road_pairs() -> Vec<PointPair> {
                 through: [x, y, z],
                 target: [x, y, z],
                 weight: 1.0,
+                wavelength: None,
             });
         }
     }

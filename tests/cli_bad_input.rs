@@ -544,4 +544,68 @@ fn real_air_parameters_that_do_not_exist_are_named() {
         &text,
         &["air.temperature.exponential.delta", "no `exponential`"],
     );
+
+#[test]
+fn pair_wavelengths_out_of_range_or_on_a_logistic_medium() {
+    let pair = r#""target": [0.0, 2.0, 900.0] }"#;
+    rejects(
+        &edit(
+            pair,
+            r#""target": [0.0, 2.0, 900.0], "wavelength": 550.0 }"#,
+        ),
+        &["pairs[0].wavelength", "real air"],
+    );
+    let air = GOOD
+        .replacen(
+            r#""scale": 1.0,
+    "background": { "n": 1.0, "a": 40.0 },
+    "inversion": { "n": 0.3, "a": 2.0, "height": 25.0 }"#,
+            r#""air": { "temperature": { "base": 10.0 } }"#,
+            1,
+        )
+        .replacen(r#""background.a""#, r#""air.temperature.base""#, 2);
+    assert!(
+        air.contains(r#""air""#),
+        "test bug: the medium was not replaced"
+    );
+    for nm in ["200.0", "1800.0", "-550.0"] {
+        rejects(
+            &air.replacen(
+                pair,
+                &format!(r#""target": [0.0, 2.0, 900.0], "wavelength": {nm} }}"#),
+                1,
+            ),
+            &["pairs[0].wavelength", "300…1700 nm"],
+        );
+    }
+}
+
+#[test]
+fn dispersion_on_a_logistic_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scene.json");
+    std::fs::write(
+        &input,
+        r#"{ "camera": { "position": [0, 2, 0], "look_at": [0, 2, 100], "vertical_fov": 10, "width": 16, "height": 9 },
+             "medium": { "scale": 1.0, "background": { "n": 1.0, "a": 40.0 } },
+             "dispersion": true }"#,
+    )
+    .unwrap();
+    let output = dir.path().join("out.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("render")
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains(&input.display().to_string()), "{stderr}");
+    assert!(
+        stderr.contains("dispersion") && stderr.contains("real air"),
+        "{stderr}"
+    );
+    assert!(!output.exists());
 }

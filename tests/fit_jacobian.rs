@@ -32,6 +32,7 @@ fn pairs() -> Vec<PointPair> {
         through: [tx, ty, 900.0],
         target: [tx, ey, 900.0],
         weight: 1.0,
+        wavelength: None,
     };
     vec![
         mk(0.0, -1.0, 20.0),

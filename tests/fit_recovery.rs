@@ -36,6 +36,7 @@ fn geometry() -> Vec<PointPair> {
                     through,
                     target: through,
                     weight: 1.0,
+                    wavelength: None,
                 });
             }
         }

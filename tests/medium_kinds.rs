@@ -236,6 +236,7 @@ fn exact_pairs(truth: &LinearSquare) -> Vec<PointPair> {
                 through,
                 target: through,
                 weight: 1.0,
+                wavelength: None,
             };
             // The pair's plane is vertical through the target and normal to
             // the horizontal launch direction, so it is the plane at

@@ -9,7 +9,7 @@
 //! the derivative: no step-control noise, unlike finite differences.
 
 use crate::math::Real;
-use crate::medium::{Field, Medium, Param};
+use crate::medium::{Medium, PairFields, Param};
 use crate::pair::PointPair;
 use crate::problem::Problem;
 use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
@@ -128,30 +128,48 @@ impl Objective {
         m
     }
 
+    /// The fields the pairs are traced through at `medium`: one per distinct
+    /// pair wavelength ([`PairFields`]).
+    fn fields<T: Real>(&self, medium: &Medium<T>) -> PairFields<T> {
+        PairFields::new(medium, self.pairs.iter().map(|p| p.wavelength))
+    }
+
     /// Residuals and flags at `x`. Pairs are traced in parallel; with RK4 they
     /// go through the batch entry (for the logistic kind the SIMD lanes kernel:
     /// same steps and endpoints as the scalar tracer to ~1e-12 m). The result
     /// is identical for any number of threads.
     pub fn residuals(&self, x: &[f64]) -> (DVector<f64>, Vec<PairFlags>) {
         self.residual_evaluations.fetch_add(1, Ordering::Relaxed);
-        let field = self.medium(x).field();
+        let fields = self.fields(&self.medium(x));
         let traces: Vec<Trace> = match BatchOptions::from_trace_options(&self.options) {
             // RK4 goes through the batch entry, which takes the lanes kernel
             // for the logistic kind and the general tracer for the others.
             Some(batch) => {
                 let mut out = vec![Trace::default(); self.pairs.len()];
-                // Chunks of one lane width; the split is fixed, so threads only
-                // change who computes a chunk, not what it computes.
-                self.jobs
-                    .par_chunks(LANE_CHUNK)
-                    .zip(out.par_chunks_mut(LANE_CHUNK))
-                    .for_each(|(jobs, out)| trace_batch_into(&field, jobs, &batch, out));
+                // One batch per wavelength (a single one, of every pair in
+                // order, without per-pair wavelengths).
+                for (g, field) in fields.fields().iter().enumerate() {
+                    let members: Vec<usize> = (0..self.pairs.len())
+                        .filter(|&i| fields.groups()[i] == g)
+                        .collect();
+                    let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
+                    let mut part = vec![Trace::default(); members.len()];
+                    // Chunks of one lane width; the split is fixed, so threads
+                    // only change who computes a chunk, not what it computes.
+                    jobs.par_chunks(LANE_CHUNK)
+                        .zip(part.par_chunks_mut(LANE_CHUNK))
+                        .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
+                    for (i, t) in members.into_iter().zip(part) {
+                        out[i] = t;
+                    }
+                }
                 out
             }
             None => self
                 .pairs
                 .par_iter()
-                .map(|pair| pair.evaluate::<f64, _>(&field, &self.options, None).0)
+                .enumerate()
+                .map(|(i, pair)| pair.evaluate::<f64, _>(fields.of(i), &self.options, None).0)
                 .collect(),
         };
         let mut r = DVector::zeros(self.len());
@@ -212,12 +230,15 @@ impl Objective {
                 None => D::<N>::from_re(v),
             }
         });
-        let field = Field::new(&seeded);
+        // The per-wavelength media come from the seeded one, so they carry
+        // the same derivative parts: the Jacobian stays exact.
+        let fields = self.fields(&seeded);
         let rows: Vec<([f64; 3], [[f64; N]; 3], u64)> = self
             .pairs
             .par_iter()
-            .map(|pair| {
-                let (t, res) = pair.evaluate::<D<N>, _>(&field, &self.options, None);
+            .enumerate()
+            .map(|(i, pair)| {
+                let (t, res) = pair.evaluate::<D<N>, _>(fields.of(i), &self.options, None);
                 let comps = [res.x, res.y, res.z];
                 let mut d = [[0.0; N]; 3];
                 for (row, c) in d.iter_mut().zip(&comps) {

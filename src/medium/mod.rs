@@ -13,12 +13,14 @@
 
 pub mod air;
 pub mod analytic;
+pub mod dispersion;
 mod envelope;
 mod kind;
 mod logistic;
 mod params;
 mod rim;
 
+pub use dispersion::PairFields;
 pub use envelope::{Envelope, Patch, VerticalFeature};
 pub use kind::{Field, Medium};
 pub use logistic::{Background, C_SCALE, HotSpot, Inversion, LogisticField, LogisticMedium};

@@ -193,13 +193,16 @@ fn describe_method(problem: &Problem) -> String {
 impl RayFigure {
     fn new(problem: &Problem, medium: &Medium) -> RayFigure {
         use rayon::prelude::*;
-        let field = medium.field();
+        let fields = crate::evaluate::pair_fields(problem, medium);
+        // The profiles show the medium as given (its own wavelength).
+        let field = &fields.fields()[0];
         let traced: Vec<_> = problem
             .pairs
             .par_iter()
-            .map(|pair| {
+            .enumerate()
+            .map(|(i, pair)| {
                 let mut path: Vec<RayState> = Vec::new();
-                let report = pair_report(pair, &field, &problem.trace, Some(&mut path));
+                let report = pair_report(pair, fields.of(i), &problem.trace, Some(&mut path));
                 (report, path)
             })
             .collect();

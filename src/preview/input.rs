@@ -112,6 +112,7 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
         trace: Default::default(),
         exposure: None,
         glare: None,
+        dispersion: None,
     };
     Scene::from_file(file, path)
 }

@@ -20,7 +20,7 @@
 //! | `medium` | the starting medium ([`Medium`]: the logistic model of `docs/model.md`); a term left out is not modelled |
 //! | `free` | parameters the fit may change, by path name; absent: trace and report only |
 //! | `bounds` | optional `[low, high]` per free parameter |
-//! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight` |
+//! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight`, optional `wavelength` (nm, real air only: the pair is traced with `air.wavelength` replaced by it) |
 //! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
 //! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12) |
 
@@ -115,6 +115,15 @@ impl Problem {
         for (i, pair) in file.pairs.iter().enumerate() {
             pair.validate()
                 .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
+            if pair.wavelength.is_some() && !file.medium.is_dispersive() {
+                return Err(bad(
+                    format!("pairs[{i}].wavelength"),
+                    format!(
+                        "a per-pair wavelength needs real air (`medium.air`), but this medium is the {} model, which has no wavelength",
+                        file.medium.kind_name()
+                    ),
+                ));
+            }
         }
 
         let mut free = Vec::with_capacity(file.free.len());

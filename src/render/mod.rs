@@ -23,6 +23,7 @@
 pub mod accel;
 pub mod air;
 pub mod camera;
+pub mod dispersion;
 pub mod glare;
 pub mod march;
 pub mod output;
@@ -158,6 +159,9 @@ pub struct Renderer {
     samples: u32,
     setup: RenderStats,
     objects_box: Option<Aabb>,
+    /// For a dispersive scene, one renderer per colour channel, each with
+    /// the air at its wavelength ([`dispersion`]).
+    channels: Option<Box<[Renderer; 3]>>,
 }
 
 impl Renderer {
@@ -225,8 +229,15 @@ impl Renderer {
             samples,
             setup,
             objects_box,
+            channels: dispersion::channel_renderers(scene, options),
         };
-        if options.path_reuse && r.air.is_stratified() && !r.air.is_straight() {
+        // A dispersive render traces through its channels' renderers: this
+        // one's own table would go unused.
+        if options.path_reuse
+            && r.channels.is_none()
+            && r.air.is_stratified()
+            && !r.air.is_straight()
+        {
             let start = Instant::now();
             let table = r.build_table();
             r.setup.table_seconds = start.elapsed().as_secs_f64();
@@ -421,6 +432,11 @@ impl Renderer {
 
     /// Renders the image.
     pub fn render(&self) -> Rendered {
+        if let Some(channels) = &self.channels {
+            let mut image = dispersion::render_channels(channels);
+            self.apply_glare(&mut image);
+            return image;
+        }
         let (w, h) = (self.camera.width, self.camera.height);
         let tiles_x = w.div_ceil(TILE);
         let tiles_y = h.div_ceil(TILE);
@@ -467,18 +483,29 @@ impl Renderer {
             stats.shadow += s.shadow;
         }
         stats.trace_seconds = start.elapsed().as_secs_f64();
+        let mut image = Rendered {
+            width: w,
+            height: h,
+            pixels,
+            stats,
+        };
+        self.apply_glare(&mut image);
+        image
+    }
+
+    /// Adds the scene's veiling glare, if it has one and the options want it.
+    fn apply_glare(&self, image: &mut Rendered) {
         if let Some(g) = &self.scene.glare
             && self.options.glare
             && self.options.shading == Shading::Lit
         {
             let settings = g.in_pixels(self.camera.pixel_angle());
-            stats.glare = Some(glare::apply(&mut pixels, w, h, &settings));
-        }
-        Rendered {
-            width: w,
-            height: h,
-            pixels,
-            stats,
+            image.stats.glare = Some(glare::apply(
+                &mut image.pixels,
+                image.width,
+                image.height,
+                &settings,
+            ));
         }
     }
 

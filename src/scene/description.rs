@@ -30,6 +30,7 @@
 //! | `glare` | veiling glare of the sun and its mirage images: `enabled`, `strength`, `threshold`, `epsilon`, `kernels` ([`crate::scene::glare`]); absent: none |
 //! | `exposure` | multiplies the radiance before tone mapping (default 1) |
 //! | `samples_per_pixel` | default 1 (the pixel centre); more: a low-discrepancy pattern inside the pixel |
+//! | `dispersion` | `true`: R, G and B are each traced through the air at their own wavelength (real air only; default false; [`crate::render::dispersion`]) |
 //! | `trace` | `step`: the RK4 step (metres, default 4), `max_distance`: the arc length after which a ray sees the sky along its final direction (metres, default 20000) |
 //!
 //! Exactly one of `medium` and `medium_from` is given; unknown fields anywhere are
@@ -220,6 +221,10 @@ pub struct SceneFile {
     /// Integration settings.
     #[serde(default)]
     pub trace: SceneTraceSpec,
+    /// Trace R, G and B through the air each at its own wavelength (real air
+    /// only; default false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dispersion: Option<bool>,
 }
 
 /// A validated pinhole camera description.
@@ -308,6 +313,9 @@ pub struct Scene {
     pub samples_per_pixel: u32,
     /// RK4 step (metres, > 0).
     pub step: f64,
+    /// Trace R, G and B at their own wavelengths
+    /// ([`crate::render::dispersion::CHANNEL_WAVELENGTHS`]); only for real air.
+    pub dispersion: bool,
     /// Largest arc length of a camera ray (metres, > 0).
     pub max_distance: f64,
 }
@@ -581,6 +589,17 @@ impl Scene {
             "trace.max_distance",
             file.trace.max_distance.unwrap_or(DEFAULT_MAX_DISTANCE),
         )?;
+        let dispersion = file.dispersion.unwrap_or(false);
+        if dispersion && !medium.is_dispersive() {
+            return Err(Error::input(
+                path,
+                "dispersion",
+                format!(
+                    "dispersion needs real air (`medium.air`, whose refractivity depends on the wavelength), but this medium is the {} model, which has no wavelength",
+                    medium.kind_name()
+                ),
+            ));
+        }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -602,6 +621,7 @@ impl Scene {
             samples_per_pixel,
             step,
             max_distance,
+            dispersion,
         })
     }
 }

@@ -51,6 +51,7 @@
 //!     through: [0.0, 2.0, 100.0],
 //!     target: [0.0, 2.0, 100.0],
 //!     weight: 1.0,
+//!     wavelength: None,
 //! };
 //! let options = BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 }))
 //!     .expect("an RK4 method");
