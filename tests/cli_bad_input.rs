@@ -544,6 +544,7 @@ fn real_air_parameters_that_do_not_exist_are_named() {
         &text,
         &["air.temperature.exponential.delta", "no `exponential`"],
     );
+}
 
 #[test]
 fn pair_wavelengths_out_of_range_or_on_a_logistic_medium() {
