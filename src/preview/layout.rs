@@ -31,7 +31,7 @@ pub const GROUND_CHECKER: u32 = 2;
 /// `inversion` and the hot spots' coefficients).
 pub const MEDIUM_LOGISTIC: u32 = 0;
 /// [`Params::medium`]`[0]`: real air (the `air_table` buffer; see
-/// [`super::real_air`]).
+/// `real_air`).
 pub const MEDIUM_AIR: u32 = 1;
 
 /// One instruction of an SDF program (96 bytes, vec4-aligned).
@@ -132,7 +132,7 @@ pub struct Params {
     /// irradiance, fade scale (0: no fade), drawn (1) or not (0)]`.
     pub stars: [f32; 4],
     /// `[medium kind (`MEDIUM_*`), real air's height intervals, its formula
-    /// grid's cells along T, along P]` (see [`super::real_air::AirTables`]).
+    /// grid's cells along T, along P]` (see `real_air::AirTables`).
     pub medium: [u32; 4],
     /// Real air: `[lowest node, highest node, Gladstone–Dale K (0: the
     /// grid), T floor (K)]`.
