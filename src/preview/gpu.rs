@@ -75,6 +75,7 @@ pub struct Tracer {
     cells: wgpu::Buffer,
     near: wgpu::Buffer,
     stars: wgpu::Buffer,
+    air_table: wgpu::Buffer,
     sky: wgpu::Texture,
     output: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -183,7 +184,7 @@ impl Tracer {
             },
             count: None,
         }];
-        entries.extend((1..=4).chain(7..=9).map(storage_entry));
+        entries.extend((1..=4).chain(7..=10).map(storage_entry));
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 5,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -249,11 +250,12 @@ impl Tracer {
         let cells = storage_buffer(device, "grid cells", bytemuck::cast_slice(&scene.cells));
         let near = storage_buffer(device, "near lists", bytemuck::cast_slice(&scene.near));
         let stars = storage_buffer(device, "star cells", bytemuck::cast_slice(&scene.stars));
+        let air_table = storage_buffer(device, "air table", bytemuck::cast_slice(&scene.air_table));
         let bind_group = Self::bind(
             device,
             &layout,
             [
-                &params, &hotspots, &objects, &nodes, &profile, &cells, &near, &stars,
+                &params, &hotspots, &objects, &nodes, &profile, &cells, &near, &stars, &air_table,
             ],
             &sky,
             &output,
@@ -269,6 +271,7 @@ impl Tracer {
             cells,
             near,
             stars,
+            air_table,
             sky,
             output,
             bind_group,
@@ -280,11 +283,11 @@ impl Tracer {
     }
 
     /// The bind group: `buffers` are the uniform block, then the storage
-    /// buffers at bindings 1–4 and 7–9.
+    /// buffers at bindings 1–4 and 7–10.
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        buffers: [&wgpu::Buffer; 8],
+        buffers: [&wgpu::Buffer; 9],
         sky: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> wgpu::BindGroup {
@@ -292,7 +295,7 @@ impl Tracer {
         let out_view = output.create_view(&Default::default());
         let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
             .iter()
-            .zip([0, 1, 2, 3, 4, 7, 8, 9])
+            .zip([0, 1, 2, 3, 4, 7, 8, 9, 10])
             .map(|(b, binding)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
@@ -366,6 +369,11 @@ impl Tracer {
             "profile",
             bytemuck::cast_slice(&scene.profile),
         );
+        put(
+            &mut self.air_table,
+            "air table",
+            bytemuck::cast_slice(&scene.air_table),
+        );
         let (w, h) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
         if (w, h) != (self.width, self.height) {
             self.output = output_texture(device, w, h);
@@ -386,6 +394,7 @@ impl Tracer {
                     &self.cells,
                     &self.near,
                     &self.stars,
+                    &self.air_table,
                 ],
                 &self.sky,
                 &self.output,

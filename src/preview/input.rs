@@ -1,6 +1,7 @@
 //! What the previewer shows: a scene file, or a problem file seen as a scene
 //! (its medium over a plain ground, from the first pair's origin); the medium
-//! must be of the logistic kind, which the shader and the editor evaluate.
+//! must be of a kind the shader evaluates: the logistic model (which the
+//! editor also edits) or real air.
 
 use crate::error::{Error, FieldError, Result};
 use crate::io::json::{parse_json, read_input};
@@ -26,14 +27,30 @@ pub struct Input {
     pub problem: Option<Problem>,
 }
 
-/// The logistic parameters of `medium`, or the error that the previewer (whose
-/// shader and editor evaluate the logistic model) cannot show this kind.
+/// Whether the previewer's shader evaluates `medium`'s kind (the logistic
+/// model, real air), else the error naming the kind.
+pub fn previewable(medium: &Medium) -> std::result::Result<(), FieldError> {
+    match medium {
+        Medium::Logistic(_) | Medium::Air(_) => Ok(()),
+        other => Err(FieldError::new(
+            "medium",
+            format!(
+                "the previewer shows the logistic model and real air; this medium is of kind `{}` (use `mirage render`)",
+                other.kind_name()
+            ),
+        )),
+    }
+}
+
+/// The logistic parameters of `medium`, or the error that the previewer's
+/// editor (its sliders, drags and fit edit logistic parameters) cannot edit
+/// this kind.
 pub fn logistic<'a>(medium: &'a Medium, file: &Path) -> Result<&'a LogisticMedium> {
     medium.as_logistic().ok_or_else(|| {
         FieldError::new(
             "medium",
             format!(
-                "the previewer shows the logistic model only; this medium is of kind `{}` (use `mirage render`)",
+                "the previewer edits the logistic model only; this medium is of kind `{}` (edit the file, or use `mirage fit`)",
                 medium.kind_name()
             ),
         )
@@ -42,10 +59,10 @@ pub fn logistic<'a>(medium: &'a Medium, file: &Path) -> Result<&'a LogisticMediu
 }
 
 /// Reads a scene or a problem file (a scene has a `camera`, a problem `pairs`);
-/// its medium must be of the logistic kind ([`logistic`]).
+/// its medium must be of a kind the shader evaluates ([`previewable`]).
 pub fn load_input(path: &Path) -> Result<Input> {
     let input = load_any_input(path)?;
-    logistic(&input.scene.medium, path)?;
+    previewable(&input.scene.medium).map_err(|e| e.in_file(path))?;
     Ok(input)
 }
 

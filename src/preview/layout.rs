@@ -27,6 +27,12 @@ pub const GROUND_UNIFORM: u32 = 1;
 /// [`Params::flags`]`[2]`: a checkered ground ([`Params::ground0`],
 /// [`Params::ground1`]).
 pub const GROUND_CHECKER: u32 = 2;
+/// [`Params::medium`]`[0]`: the logistic model (the uniforms `background`,
+/// `inversion` and the hot spots' coefficients).
+pub const MEDIUM_LOGISTIC: u32 = 0;
+/// [`Params::medium`]`[0]`: real air (the `air_table` buffer; see
+/// `real_air`).
+pub const MEDIUM_AIR: u32 = 1;
 
 /// One instruction of an SDF program (96 bytes, vec4-aligned).
 #[repr(C)]
@@ -125,6 +131,14 @@ pub struct Params {
     /// Stars of the physical sky: `[angular radius, flux scale × the sun's
     /// irradiance, fade scale (0: no fade), drawn (1) or not (0)]`.
     pub stars: [f32; 4],
+    /// `[medium kind (`MEDIUM_*`), real air's height intervals, its formula
+    /// grid's cells along T, along P]` (see `real_air::AirTables`).
+    pub medium: [u32; 4],
+    /// Real air: `[lowest node, highest node, Gladstone–Dale K (0: the
+    /// grid), T floor (K)]`.
+    pub air_range: [f32; 4],
+    /// Real air's formula grid: `[T₀, ΔT, P₀, ΔP]`.
+    pub air_grid: [f32; 4],
 }
 
 /// One cell of the distance grid ([`crate::render::accel::Grid`]).

@@ -24,9 +24,10 @@ pub mod input;
 pub mod layout;
 pub mod pack;
 pub mod program;
+pub mod real_air;
 pub mod shader;
 pub mod window;
 
 pub use command::{PreviewOptions, preview_command};
 pub use frame::{apply_glare, open_gpu, render_frame};
-pub use input::{BENCH_SIZE, Input, load_input, logistic, problem_scene};
+pub use input::{BENCH_SIZE, Input, load_input, logistic, previewable, problem_scene};

@@ -4,17 +4,21 @@
 //! sun, the sky table and the physical sky's star cells, into the buffers of
 //! [`super::layout`].
 //!
+//! Real air packs as tables of its uniform profile and of its formula
+//! ([`super::real_air`]), its hot spots as `[δT, 1/H, x, z, radius, edge]`.
+//!
 //! Everything is f32, and the medium stays in δ form: the amplitudes are the
 //! compiled `C·|k_s|·n/S` (≈ 1e-5), which f32 keeps to 7 digits, whereas
 //! `1 + δ` would keep three.
 
 use super::layout::{
-    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, GpuCell, GpuHotSpot, GpuObject, Node, Params,
-    SHADING_ALBEDO, SHADING_LIT, rgb4, v4,
+    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, GpuCell, GpuHotSpot, GpuObject,
+    MEDIUM_LOGISTIC, Node, Params, SHADING_ALBEDO, SHADING_LIT, rgb4, v4,
 };
 use super::program::compile_objects;
+use super::real_air::pack_air;
 use crate::error::FieldError;
-use crate::medium::{LogisticMedium, Medium};
+use crate::medium::{Field, LogisticMedium, Medium};
 use crate::render::accel::{Aabb, Grid};
 use crate::render::air::Air;
 use crate::render::camera::Camera;
@@ -56,6 +60,9 @@ pub struct SceneBuffers {
     pub cells: Vec<GpuCell>,
     /// The grid's near lists (at least one element).
     pub near: Vec<u32>,
+    /// Real air's tables ([`super::real_air::AirTables::table`]; at least
+    /// one element).
+    pub air_table: Vec<[f32; 4]>,
     /// The physical sky's star cells (`STAR_CELLS² × 6`, face-major):
     /// `[place u, place v, brightness unit⁶, tint]`, tint 0 where a cell has
     /// no star (at least one element).
@@ -143,15 +150,7 @@ pub fn star_cells() -> Vec<[f32; 4]> {
 /// Packs `scene` (with `medium` instead of the scene's own, so that the
 /// editor can change the air without rebuilding the scene) for `view`.
 pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers, FieldError> {
-    if medium.as_logistic().is_none() {
-        return Err(FieldError::new(
-            "medium",
-            format!(
-                "the previewer's shader evaluates the logistic model only; this medium is of kind `{}`",
-                medium.kind_name()
-            ),
-        ));
-    }
+    super::input::previewable(medium)?;
     // As the CPU renderer: seen from the scene camera's altitude.
     let sky = SkyModel::from_spec(
         &scene.sky,
@@ -178,6 +177,7 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
         cells: Vec::new(),
         near: Vec::new(),
         stars: vec![[0.0; 4]],
+        air_table: Vec::new(),
     };
     // The CPU renderer's grid of unbounding spheres and near lists, cut at
     // the ground as there.
@@ -223,7 +223,7 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
     if buffers.near.is_empty() {
         buffers.near.push(0);
     }
-    buffers.set_air(&air);
+    buffers.set_air(medium, &air);
     buffers.set_view(view);
     let p = &mut buffers.params;
     p.size[3] = scene.objects.len() as u32;
@@ -300,14 +300,24 @@ impl SceneBuffers {
         p.stars[0] = star_radius(c.pixel_angle()) as f32;
     }
 
-    /// Sets the medium and what follows from it (the air's analysis).
-    pub fn set_air(&mut self, air: &Air) {
+    /// Sets the medium and what follows from it (the air's analysis): `air`
+    /// is `medium` analysed ([`Air::new`]).
+    pub fn set_air(&mut self, medium: &Medium, air: &Air) {
         let p = &mut self.params;
-        // `pack` admits the logistic kind only; anything else packs as δ ≡ 0.
+        // Real air: its tables, and its hot spots' coefficients in kelvins.
+        let real = match (air.field(), medium.as_air()) {
+            (Field::Air(field), Some(m)) => Some((m, pack_air(m, field))),
+            _ => None,
+        };
+        // Anything else packs as the logistic model (δ ≡ 0 when straight).
         let raw = match air.field().as_logistic() {
             Some(f) => f.coefficients(),
             None => LogisticMedium::vacuum().field().coefficients(),
         };
+        p.medium = [MEDIUM_LOGISTIC, 0, 0, 0];
+        p.air_range = [0.0; 4];
+        p.air_grid = [0.0; 4];
+        self.air_table = vec![[0.0; 4]];
         p.flags[1] = air.is_straight() as u32;
         p.background = match raw.background {
             Some([amp, inv]) => [amp as f32, inv as f32, 1.0, 0.0],
@@ -324,8 +334,18 @@ impl SceneBuffers {
             finite_or_big(outside) as f32,
             0.0,
         ];
-        self.hotspots = raw
-            .hotspots
+        let coefficients: Vec<[f64; 6]> = match &real {
+            Some((m, tables)) => {
+                tables.set_params(p);
+                self.air_table = tables.table.clone();
+                m.hotspots
+                    .iter()
+                    .map(|h| [h.delta, h.scale_height.recip(), h.x, h.z, h.radius, h.edge])
+                    .collect()
+            }
+            None => raw.hotspots.to_vec(),
+        };
+        self.hotspots = coefficients
             .iter()
             .zip(air.zones())
             .map(|(h, z)| GpuHotSpot {

@@ -9,7 +9,8 @@
 //! the Rust `#[repr(C)]` structs of [`super::layout`].
 
 use super::layout::{
-    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, SHADING_ALBEDO, SHADING_LIT,
+    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, MEDIUM_AIR, MEDIUM_LOGISTIC, SHADING_ALBEDO,
+    SHADING_LIT,
 };
 use super::program::{Op, STACK_DEPTH};
 use crate::render::sky::{STAR_CELLS, STAR_MARGIN_MAX};
@@ -52,6 +53,8 @@ pub fn constants() -> Vec<Constant> {
         U32("GROUND_NONE", GROUND_NONE),
         U32("GROUND_UNIFORM", GROUND_UNIFORM),
         U32("GROUND_CHECKER", GROUND_CHECKER),
+        U32("MEDIUM_LOGISTIC", MEDIUM_LOGISTIC),
+        U32("MEDIUM_AIR", MEDIUM_AIR),
         F32("BIG", BIG),
         F32("STAR_CELLS", STAR_CELLS as f32),
         F32("STAR_MARGIN_MAX", STAR_MARGIN_MAX as f32),
@@ -210,6 +213,9 @@ mod tests {
                 grid_dims,
                 grid_cell,
                 stars,
+                medium,
+                air_range,
+                air_grid,
             }),
         );
         check_struct(
@@ -259,6 +265,7 @@ mod tests {
             (7, size_of::<GpuCell>()),
             (8, size_of::<u32>()),
             (9, size_of::<[f32; 4]>()),
+            (10, size_of::<[f32; 4]>()),
         ];
         let mut seen = 0;
         for (_, var) in module.global_variables.iter() {

@@ -6,7 +6,7 @@
 // from δ and the elevation, never as |v_h| − 1.
 //
 // The constants shared with the Rust side (OP_*, STACK_DEPTH, WORKGROUP,
-// SHADING_*, GROUND_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
+// SHADING_*, GROUND_*, MEDIUM_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
 // that src/preview/shader.rs generates and puts before this file.
 
 struct Params {
@@ -36,6 +36,9 @@ struct Params {
     grid_dims: vec4<u32>,
     grid_cell: vec4<f32>,
     stars: vec4<f32>,
+    medium: vec4<u32>,
+    air_range: vec4<f32>,
+    air_grid: vec4<f32>,
 }
 struct Cell { empty: f32, far: f32, start: u32, len: u32 }
 
@@ -53,6 +56,7 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 @group(0) @binding(7) var<storage, read> cells: array<Cell>;
 @group(0) @binding(8) var<storage, read> near: array<u32>;
 @group(0) @binding(9) var<storage, read> stars: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> air_table: array<vec4<f32>>;
 
 const PI: f32 = 3.14159265358979;
 const MAX_ITERATIONS: u32 = 20000u;
@@ -67,8 +71,128 @@ fn sigmoid(x: f32) -> vec2<f32> {
     return vec2<f32>(s, e * inv * inv);
 }
 
-// (∇δ, δ) at p.
+// ------------------------------------------------------- real air (real_air.rs)
+
+// The uniform air (T_u, dT_u/dh, P, dP/dh) at height h: the cubic Hermite of
+// the interval holding h (binary search; a node belongs to the interval
+// below it, as real_air.rs says); held beyond the end nodes.
+fn air_profile(h: f32) -> vec4<f32> {
+    let n = P.medium.y;
+    let hc = clamp(h, P.air_range.x, P.air_range.y);
+    var lo = 0u;
+    var hi = n - 1u;
+    while (lo < hi) {
+        let mid = (lo + hi + 1u) / 2u;
+        if (air_table[3u * mid].x < hc) { lo = mid; } else { hi = mid - 1u; }
+    }
+    let hw = air_table[3u * lo];
+    let a = air_table[3u * lo + 1u];
+    let b = air_table[3u * lo + 2u];
+    let w = hw.y;
+    let u = clamp((hc - hw.x) / w, 0.0, 1.0);
+    let u2 = u * u;
+    let u3 = u2 * u;
+    let h01 = 3.0 * u2 - 2.0 * u3;
+    let h10 = u3 - 2.0 * u2 + u;
+    let h11 = u3 - u2;
+    let d01 = 6.0 * u - 6.0 * u2;
+    let d10 = 3.0 * u2 - 4.0 * u + 1.0;
+    let d11 = 3.0 * u2 - 2.0 * u;
+    let t = a.x + h01 * b.x + w * (h10 * a.y + h11 * b.y);
+    let pr = a.z + h01 * b.z + w * (h10 * a.w + h11 * b.w);
+    var dt = d01 * b.x / w + d10 * a.y + d11 * b.y;
+    var dp = d01 * b.z / w + d10 * a.w + d11 * b.w;
+    if (h != hc) {
+        dt = 0.0;
+        dp = 0.0;
+    }
+    return vec4<f32>(t, dt, pr, dp);
+}
+
+// (δ, ∂δ/∂T, ∂δ/∂P) of the formula: the bicubic Hermite of the grid cell, or
+// Gladstone–Dale in closed form.
+fn air_formula(t: f32, pr: f32) -> vec3<f32> {
+    if (P.air_range.z > 0.0) {
+        let pp = max(pr, 1e-6);
+        let d = P.air_range.z * (pp / 101325.0) / t;
+        return vec3<f32>(d, -d / t, d / pp);
+    }
+    let nt = P.medium.z;
+    let np = P.medium.w;
+    let g = P.air_grid;
+    let fu = clamp((t - g.x) / g.y, 0.0, f32(nt));
+    let fv = clamp((pr - g.z) / g.w, 0.0, f32(np));
+    let i = min(u32(floor(fu)), nt - 1u);
+    let j = min(u32(floor(fv)), np - 1u);
+    let u = fu - f32(i);
+    let v = fv - f32(j);
+    let base = 3u * P.medium.y + 4u * (i + nt * j);
+    let su = 3.0 * u * u - 2.0 * u * u * u;
+    let sv = 3.0 * v * v - 2.0 * v * v * v;
+    let hu = array<f32, 2>(1.0 - su, su);
+    let hv = array<f32, 2>(1.0 - sv, sv);
+    let ku = array<f32, 2>(u * u * u - 2.0 * u * u + u, u * u * u - u * u);
+    let kv = array<f32, 2>(v * v * v - 2.0 * v * v + v, v * v * v - v * v);
+    let du = 6.0 * u - 6.0 * u * u;
+    let dv = 6.0 * v - 6.0 * v * v;
+    let hdu = array<f32, 2>(-du, du);
+    let hdv = array<f32, 2>(-dv, dv);
+    let kdu = array<f32, 2>(3.0 * u * u - 4.0 * u + 1.0, 3.0 * u * u - 2.0 * u);
+    let kdv = array<f32, 2>(3.0 * v * v - 4.0 * v + 1.0, 3.0 * v * v - 2.0 * v);
+    var f = air_table[base].x;
+    var f_u = 0.0;
+    var f_v = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        let a = k & 1u;
+        let b = k >> 1u;
+        let c = air_table[base + k];
+        // The first corner's value is the cell's base, the others relative to it.
+        var df = c.x;
+        if (k == 0u) { df = 0.0; }
+        f += hu[a] * hv[b] * df + ku[a] * hv[b] * c.y + hu[a] * kv[b] * c.z + ku[a] * kv[b] * c.w;
+        f_u += hdu[a] * hv[b] * df + kdu[a] * hv[b] * c.y + hdu[a] * kv[b] * c.z + kdu[a] * kv[b] * c.w;
+        f_v += hu[a] * hdv[b] * df + ku[a] * hdv[b] * c.y + hu[a] * kdv[b] * c.z + ku[a] * kdv[b] * c.w;
+    }
+    return vec3<f32>(f, f_u / g.y, f_v / g.w);
+}
+
+// (∇δ, δ) of real air at p (AirField::delta_gradient).
+fn air_medium(p: vec3<f32>) -> vec4<f32> {
+    let u = air_profile(p.y);
+    var t = u.x;
+    var grad_t = vec3<f32>(0.0, u.y, 0.0);
+    for (var j = 0u; j < P.size.z; j++) {
+        let h = hotspots[j];
+        let d = vec2<f32>(p.x - h.a.z, p.z - h.a.w);
+        let rho = length(d);
+        let sw = sigmoid(h.b.y * (h.b.x - rho));
+        var r = vec2<f32>(0.0);
+        if (rho > 0.0) { r = d / rho; }
+        let dw = -h.b.y * sw.y;
+        var e = 1.0;
+        var de = 0.0;
+        if (p.y > 0.0) {
+            e = exp(-p.y * h.a.y);
+            de = -e * h.a.y;
+        }
+        let amp = h.a.x * e;
+        t += amp * sw.x;
+        grad_t.y += h.a.x * sw.x * de;
+        grad_t.x += amp * dw * r.x;
+        grad_t.z += amp * dw * r.y;
+    }
+    // Colder than −150 °C: held at the floor, as on the CPU.
+    if (t < P.air_range.w) {
+        t = P.air_range.w;
+        grad_t = vec3<f32>(0.0);
+    }
+    let f = air_formula(t, u.z);
+    return vec4<f32>(f.y * grad_t + vec3<f32>(0.0, f.z * u.w, 0.0), f.x);
+}
+
+// (∇δ, δ) at p: real air, or the logistic model.
 fn medium(p: vec3<f32>) -> vec4<f32> {
+    if (P.medium.x == MEDIUM_AIR) { return air_medium(p); }
     var delta = 0.0;
     var grad = vec3<f32>(0.0);
     if (P.background.z > 0.5) {

@@ -12,7 +12,9 @@
 //!   problem's pairs are drawn (through: circle, target: cross) with their
 //!   current endpoint distances; "Fit" runs the fit from the current medium
 //!   in the background; "Save" writes the input with the edited medium,
-//!   atomically.
+//!   atomically. A medium of real air is drawn as the file has it and is not
+//!   editable (the editor edits logistic parameters): its panel says so, and
+//!   its sliders, hot-spot drags, fit and save are off.
 //!
 //! - **Glare**: once the view has been still for a frame, the scene's veiling
 //!   glare is added on the CPU to the frame traced last, as on headless frames;
@@ -96,6 +98,10 @@ struct App {
     input: Input,
     size: (u32, u32),
     medium: LogisticMedium,
+    /// A medium of another kind than the logistic one (real air), shown as
+    /// the file has it and not editable: the editor's sliders, hot-spot
+    /// drags, fit and save edit logistic parameters.
+    fixed: Option<Medium>,
     /// Why the edited medium was not applied.
     medium_error: Option<FieldError>,
     medium_dirty: bool,
@@ -137,7 +143,11 @@ impl App {
         frames: Option<u64>,
         screenshot: Option<PathBuf>,
     ) -> App {
-        // load_input admits the logistic kind only.
+        // Real air is shown read-only; the editor edits the logistic kind.
+        let fixed = match &input.scene.medium {
+            Medium::Logistic(_) => None,
+            other => Some(other.clone()),
+        };
         let medium = input
             .scene
             .medium
@@ -153,6 +163,7 @@ impl App {
         let sliders = medium
             .params()
             .into_iter()
+            .filter(|_| fixed.is_none())
             .map(|(param, v)| Slider {
                 param,
                 range: editing::slider_range(param, v, bounds(param)),
@@ -161,6 +172,7 @@ impl App {
         let distances = input
             .problem
             .as_ref()
+            .filter(|_| fixed.is_none())
             .map(|p| editing::pair_distances(p, &medium))
             .unwrap_or_default();
         let save_path = editing::edited_path(&input.path).display().to_string();
@@ -170,6 +182,7 @@ impl App {
             input,
             size,
             medium,
+            fixed,
             medium_error: None,
             medium_dirty: false,
             sliders,
@@ -260,12 +273,8 @@ impl App {
         };
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
-        let buffers = pack(
-            &self.input.scene,
-            &Medium::Logistic(self.medium.clone()),
-            &view,
-        )
-        .map_err(|e| e.in_file(&self.input.path))?;
+        let buffers = pack(&self.input.scene, &self.shown_medium(), &view)
+            .map_err(|e| e.in_file(&self.input.path))?;
         let tracer = Tracer::new(&gpu, &buffers);
         let (display, display_layout, display_uniform) = display_pipeline(&gpu.device, format);
         let egui_state = egui_winit::State::new(
@@ -365,6 +374,12 @@ impl App {
         ));
         ui.separator();
         ui.label("Medium");
+        if let Some(m) = &self.fixed {
+            ui.label(format!(
+                "{}: shown as the file has it, read-only (the sliders, hot-spot drags, fit and save edit the logistic model; edit the file, or fit with `mirage fit`)",
+                m.kind_name()
+            ));
+        }
         for s in &self.sliders {
             let Some(mut v) = self.medium.get(s.param) else {
                 continue;
@@ -378,9 +393,13 @@ impl App {
         if let Some(e) = &self.medium_error {
             ui.colored_label(egui::Color32::LIGHT_RED, format!("{e} (not applied)"));
         }
-        ui.checkbox(
-            &mut self.edit_hot_spots,
-            "drag hot spots on the ground (double-click: add one)",
+        let editable = self.fixed.is_none();
+        ui.add_enabled(
+            editable,
+            egui::Checkbox::new(
+                &mut self.edit_hot_spots,
+                "drag hot spots on the ground (double-click: add one)",
+            ),
         );
         ui.separator();
         if let Some(problem) = &self.input.problem {
@@ -394,7 +413,7 @@ impl App {
                 .is_some_and(|f| f.progress().done.is_none());
             if ui
                 .add_enabled(
-                    !running && !problem.free.is_empty(),
+                    editable && !running && !problem.free.is_empty(),
                     egui::Button::new("Fit from here"),
                 )
                 .clicked()
@@ -410,7 +429,10 @@ impl App {
             ui.label("save to");
             ui.text_edit_singleline(&mut self.save_path);
         });
-        if ui.button("Save").clicked() {
+        if ui
+            .add_enabled(editable, egui::Button::new("Save"))
+            .clicked()
+        {
             let out = PathBuf::from(&self.save_path);
             self.save_message = match editing::save(&self.input.path, &self.medium, &out) {
                 Ok(()) => format!("saved {}", out.display()),
@@ -444,7 +466,7 @@ impl App {
             let d = response.drag_delta();
             self.camera.turn(d.x as f64 * ppp, d.y as f64 * ppp, h);
         }
-        if self.edit_hot_spots {
+        if self.edit_hot_spots && self.fixed.is_none() {
             if response.drag_started_by(egui::PointerButton::Primary) {
                 self.drag = response
                     .interact_pointer_pos()
@@ -566,6 +588,14 @@ impl App {
         }
     }
 
+    /// The medium drawn: the read-only one, else the edited logistic one.
+    fn shown_medium(&self) -> Medium {
+        match &self.fixed {
+            Some(m) => m.clone(),
+            None => Medium::Logistic(self.medium.clone()),
+        }
+    }
+
     /// Applies an edited medium: validated, re-analysed, uploaded, and the
     /// pairs re-traced.
     fn apply_medium(&mut self) {
@@ -575,19 +605,22 @@ impl App {
             return;
         }
         self.medium_error = None;
-        if let Some(p) = &self.input.problem {
+        if let Some(p) = &self.input.problem
+            && self.fixed.is_none()
+        {
             self.distances = editing::pair_distances(p, &self.medium);
         }
+        let medium = self.shown_medium();
         if let Some(g) = &mut self.graphics {
             let scene = &self.input.scene;
             let air = Air::new(
-                &Medium::Logistic(self.medium.clone()),
+                &medium,
                 self.straight,
                 scene.step,
                 scene.ground.is_some(),
                 Aabb::of_objects(&scene.objects),
             );
-            g.buffers.set_air(&air);
+            g.buffers.set_air(&medium, &air);
             g.tracer.update(&g.gpu, &g.buffers);
         }
     }
