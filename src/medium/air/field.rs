@@ -13,9 +13,8 @@
 //! from the formula (`refractivity::refractivity_partials`), dP/dh from the
 //! hydrostatic law at the point's own T_u, so ∇δ is the analytic gradient of δ.
 //!
-//! Below the ground (rays integrated through it) the surface terms continue
-//! along their tangent at the ground, which keeps the field C¹ and every value
-//! finite for any finite point;
+//! Below the ground (rays integrated through it) the surface terms are held
+//! at their ground value, which keeps every value finite for any finite point;
 //! above the height where the uniform air falls below −150 °C (a steep lapse
 //! far up) the medium is not air: [`AirField::ceiling`] gives that height and
 //! the tracers stop there (`End::LeftAir`), and δ is evaluated with the
@@ -80,9 +79,13 @@ impl<T: Real> Profile<T> {
                     None => {}
                 }
                 if let Some((delta, inv_h)) = exponential {
-                    let (e, de) = surface_decay(h, *inv_h);
-                    t += *delta * e;
-                    d += *delta * de;
+                    if h.val() > 0.0 {
+                        let e = (-(h * *inv_h)).exp();
+                        t += *delta * e;
+                        d -= *delta * *inv_h * e;
+                    } else {
+                        t += *delta;
+                    }
                 }
                 if let Some((delta, height, inv_th)) = inversion {
                     let (s, ds) = sigmoid((h - *height) * *inv_th);
@@ -96,19 +99,6 @@ impl<T: Real> Profile<T> {
                 (v + KELVIN, dv)
             }
         }
-    }
-}
-
-/// e^(−h/H) and its derivative above the ground; below it the tangent line
-/// 1 − h/H, so that the field stays C¹ across the ground (an adaptive step
-/// that straddles it sees no kink) and finite for any depth.
-#[inline]
-fn surface_decay<T: Real>(h: T, inv_scale: T) -> (T, T) {
-    if h.val() > 0.0 {
-        let e = (-(h * inv_scale)).exp();
-        (e, -(e * inv_scale))
-    } else {
-        (-(h * inv_scale) + 1.0, -inv_scale)
     }
 }
 
@@ -236,7 +226,12 @@ impl<T: Real> AirField<T> {
         let mut grad = V3::new(zero, dtu, zero);
         for hs in &self.hotspots {
             let (w, dw_drho, ux, uz) = rim_weight(p.x - hs.x, p.z - hs.z, hs.radius, hs.edge);
-            let (e, de) = surface_decay(p.y, hs.inv_scale);
+            let (e, de) = if p.y.val() > 0.0 {
+                let e = (-(p.y * hs.inv_scale)).exp();
+                (e, -(e * hs.inv_scale))
+            } else {
+                (T::cst(1.0), zero)
+            };
             let amp = hs.delta * e;
             t += amp * w;
             grad.y += hs.delta * w * de;
