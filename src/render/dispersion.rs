@@ -34,61 +34,66 @@ use crate::scene::Scene;
 /// sky's channel wavelengths.
 pub const CHANNEL_WAVELENGTHS: [f64; 3] = [680.0, 550.0, 440.0];
 
-/// The three per-channel renderers of a dispersive scene, or `None` if the
-/// scene is not dispersive (or its medium has no wavelength, or the render is
-/// straight, where the air does nothing).
-pub fn channel_renderers(scene: &Scene, options: &RenderOptions) -> Option<Box<[Renderer; 3]>> {
-    if !scene.dispersion || options.straight {
-        return None;
-    }
-    let mut media = Vec::with_capacity(3);
-    for nm in CHANNEL_WAVELENGTHS {
-        media.push(scene.medium.at_wavelength(nm)?);
-    }
-    let channel_options = RenderOptions {
-        glare: false,
-        progress: false,
-        ..*options
-    };
-    let mut it = media.into_iter().map(|medium| {
-        let s = Scene {
-            medium,
-            dispersion: false,
-            ..scene.clone()
+impl Renderer {
+    /// The three per-channel renderers of a dispersive scene, or `None` if the
+    /// scene is not dispersive (or its medium has no wavelength, or the render is
+    /// straight, where the air does nothing).
+    pub(super) fn channel_renderers(
+        scene: &Scene,
+        options: &RenderOptions,
+    ) -> Option<Box<[Renderer; 3]>> {
+        if !scene.dispersion || options.straight {
+            return None;
+        }
+        let mut media = Vec::with_capacity(3);
+        for nm in CHANNEL_WAVELENGTHS {
+            media.push(scene.medium.at_wavelength(nm)?);
+        }
+        let channel_options = RenderOptions {
+            glare: false,
+            progress: false,
+            ..*options
         };
-        Renderer::new(&s, &channel_options)
-    });
-    let (r, g, b) = (it.next()?, it.next()?, it.next()?);
-    Some(Box::new([r, g, b]))
-}
-
-/// Renders the three channels and takes channel c of image c; the work of
-/// all three is summed in the stats (the glare is the caller's).
-pub fn render_channels(channels: &[Renderer; 3]) -> Rendered {
-    let images = channels.each_ref().map(|r| r.render());
-    let [r, g, b] = &images;
-    let pixels = r
-        .pixels
-        .iter()
-        .zip(&g.pixels)
-        .zip(&b.pixels)
-        .map(|((r, g), b)| [r[0], g[1], b[2]])
-        .collect();
-    let mut stats = r.stats;
-    for s in [&g.stats, &b.stats] {
-        stats.samples += s.samples;
-        stats.table_samples += s.table_samples;
-        stats.march += s.march;
-        stats.shadow += s.shadow;
-        stats.table_seconds += s.table_seconds;
-        stats.grid_seconds += s.grid_seconds;
-        stats.trace_seconds += s.trace_seconds;
+        let mut it = media.into_iter().map(|medium| {
+            let s = Scene {
+                medium,
+                dispersion: false,
+                ..scene.clone()
+            };
+            Renderer::new(&s, &channel_options)
+        });
+        let (r, g, b) = (it.next()?, it.next()?, it.next()?);
+        Some(Box::new([r, g, b]))
     }
-    Rendered {
-        width: r.width,
-        height: r.height,
-        pixels,
-        stats,
+
+    /// Renders the three channels and takes channel c of image c; the work of
+    /// all three is summed in the stats (the glare is the caller's).
+    pub(super) fn render_channels(channels: &[Renderer; 3]) -> Rendered {
+        let images = channels.each_ref().map(|r| r.render());
+        let [r, g, b] = &images;
+        let pixels = r
+            .pixels
+            .iter()
+            .zip(&g.pixels)
+            .zip(&b.pixels)
+            .map(|((r, g), b)| [r[0], g[1], b[2]])
+            .collect();
+        let mut stats = r.stats;
+        for s in [&g.stats, &b.stats] {
+            stats.samples += s.samples;
+            stats.table_samples += s.table_samples;
+            stats.march += s.march;
+            stats.shadow += s.shadow;
+            stats.table_seconds += s.table_seconds;
+            stats.grid_seconds += s.grid_seconds;
+            stats.trace_seconds += s.trace_seconds;
+        }
+        Rendered {
+            width: r.width,
+            height: r.height,
+            pixels,
+            stats,
+        }
     }
 }
 

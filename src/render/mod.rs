@@ -229,7 +229,7 @@ impl Renderer {
             samples,
             setup,
             objects_box,
-            channels: dispersion::channel_renderers(scene, options),
+            channels: Renderer::channel_renderers(scene, options),
         };
         // A dispersive render traces through its channels' renderers: this
         // one's own table would go unused.
@@ -433,7 +433,7 @@ impl Renderer {
     /// Renders the image.
     pub fn render(&self) -> Rendered {
         if let Some(channels) = &self.channels {
-            let mut image = dispersion::render_channels(channels);
+            let mut image = Renderer::render_channels(channels);
             self.apply_glare(&mut image);
             return image;
         }

@@ -1,7 +1,7 @@
 //! Real air's rules (`docs/air.md`, "bad input"): the first violation, with
 //! the path of its field relative to the medium.
 
-use super::field::{AirField, COLDEST, KELVIN};
+use super::field::{AirField, COLDEST, HOTTEST, KELVIN};
 use super::model::{AirMedium, Lapse};
 use super::refractivity::Formula;
 use crate::error::FieldError;
@@ -184,11 +184,11 @@ impl AirMedium<f64> {
                     ),
                 ));
             }
-            if i == 0 && tu - KELVIN + hot > 1000.0 {
+            if i == 0 && tu - KELVIN + hot > HOTTEST {
                 return Err(FieldError::new(
                     where_,
                     format!(
-                        "the air would be {:.0} °C at the ground: not air",
+                        "the air would be {:.0} °C at the ground, hotter than {HOTTEST} °C: not air",
                         tu - KELVIN + hot
                     ),
                 ));

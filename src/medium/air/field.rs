@@ -33,6 +33,9 @@ use crate::medium::rim::rim_weight;
 pub const KELVIN: f64 = 273.15;
 /// The coldest air the formulas are asked about (°C): the contract's floor.
 pub const COLDEST: f64 = -150.0;
+/// The hottest air the formulas are asked about (°C): far above any air, below
+/// water's critical point (374 °C), where the saturation pressure ends.
+pub const HOTTEST: f64 = 300.0;
 /// Where the hydrostatic table starts (m below the ground: rays dip under it
 /// by a step at most).
 const TABLE_BOTTOM: f64 = -200.0;
@@ -249,9 +252,15 @@ impl<T: Real> IndexField<T> for AirField<T> {
         let (pressure, dp_dh) = self.pressure(p.y);
         // Past the ceiling the tracers stop; hold the floor so δ stays finite.
         let floor = COLDEST + KELVIN;
+        let hottest = HOTTEST + KELVIN;
         let (t, grad_t) = if t.val() < floor {
             let z = T::cst(0.0);
             (T::cst(floor), V3::new(z, z, z))
+        } else if t.val() > hottest {
+            // Past any air (water's saturation pressure has no value above
+            // its critical point, 374 °C): held, as below the floor.
+            let z = T::cst(0.0);
+            (T::cst(hottest), V3::new(z, z, z))
         } else {
             (t, grad_t)
         };

@@ -51,7 +51,7 @@ pub mod refractivity;
 pub mod standard;
 
 pub use checks::WAVELENGTH_RANGE;
-pub use field::{AirField, COLDEST, KELVIN};
+pub use field::{AirField, COLDEST, HOTTEST, KELVIN};
 pub use model::{
     Air, AirHotSpot, AirMedium, DEFAULT_BASE, DEFAULT_CO2, DEFAULT_PRESSURE, DEFAULT_WAVELENGTH,
     Exponential, Lapse, Step, Temperature,

@@ -105,7 +105,10 @@ impl<U: Real> Pchip<U> {
             return (zero, zero);
         }
         let hv = h.val();
-        if n == 1 || hv < self.x[0].val() {
+        // A row belongs to the interval below it, as the ground does for the
+        // surface terms and a node does in the previewer's tables: the first
+        // row is held (slope 0), the last keeps its one-sided slope.
+        if n == 1 || hv <= self.x[0].val() {
             return (self.y[0], zero);
         }
         let last = self.x[n - 1].val();
@@ -228,7 +231,10 @@ mod tests {
             .map(|&h| (h, 280.0 - 0.0065 * h))
             .collect();
         let p = pchip(&rows);
-        for i in 0..=950 {
+        // The first row itself belongs to the held outside (slope 0): from
+        // the next sample on, the line.
+        assert_eq!(p.eval(0.0), (280.0, 0.0));
+        for i in 1..=950 {
             let h = i as f64 * 0.01;
             let (v, d) = p.eval(h);
             assert!((v - (280.0 - 0.0065 * h)).abs() < 1e-12, "{h}");
