@@ -12,10 +12,18 @@ use std::path::PathBuf;
 pub struct TracePairsOptions {
     /// Problem file (JSON).
     pub problem: PathBuf,
-    /// Write the JSON report here.
+    /// Write the JSON report here. With a report, a problem of more than
+    /// 40 pairs gets a short table (the first pairs and those farthest from
+    /// their targets); without one, the table lists every pair.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
 }
+
+/// Above this many pairs, and with a report file to hold them all, the
+/// terminal table is shortened (see [`trace_table`]).
+pub const SHORT_TABLE_ABOVE: usize = 40;
+/// How many of the first pairs, and of the farthest, a short table shows.
+const SHORT_TABLE_ROWS: usize = 10;
 
 /// Traces every pair with the problem's medium and settings, prints a table,
 /// and writes the JSON report to `output` if given.
@@ -28,12 +36,17 @@ pub fn run(o: &TracePairsOptions) -> Result<TraceReport> {
     if let Some(out) = &o.output {
         write_json(out, &report)?;
     }
-    print!("{}", trace_table(&problem, &report));
+    let short = o.output.is_some() && report.pairs.len() > SHORT_TABLE_ABOVE;
+    print!("{}", trace_table(&problem, &report, !short));
     Ok(report)
 }
 
-/// The terminal table of a trace report.
-pub fn trace_table(problem: &Problem, report: &TraceReport) -> String {
+/// The terminal table of a trace report: every pair when `full`, else the
+/// first [`SHORT_TABLE_ROWS`] pairs, the as many farthest from their targets,
+/// and how many pairs were left out and how many are flagged (a table of
+/// thousands of lines says less than that, and formatting it costs as much
+/// as tracing a fan of rays).
+pub fn trace_table(problem: &Problem, report: &TraceReport, full: bool) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -47,7 +60,8 @@ pub fn trace_table(problem: &Problem, report: &TraceReport) -> String {
         "{:>4}  {:>30}  {:>12}  {:>9}  {:>7}  flags",
         "pair", "endpoint (m)", "distance (m)", "length", "rhs"
     );
-    for (i, p) in report.pairs.iter().enumerate() {
+    let row = |s: &mut String, i: usize| {
+        let p = &report.pairs[i];
         let mut flags = Vec::new();
         if p.occluded {
             flags.push("occluded");
@@ -67,6 +81,37 @@ pub fn trace_table(problem: &Problem, report: &TraceReport) -> String {
             p.stats.rhs_evaluations,
             flags.join(",")
         );
+    };
+    let n = report.pairs.len();
+    if full || n <= 2 * SHORT_TABLE_ROWS {
+        for i in 0..n {
+            row(&mut s, i);
+        }
+    } else {
+        for i in 0..SHORT_TABLE_ROWS {
+            row(&mut s, i);
+        }
+        // The farthest of the rest (ties by index), shown in index order.
+        let mut rest: Vec<usize> = (SHORT_TABLE_ROWS..n).collect();
+        rest.sort_by(|&a, &b| {
+            report.pairs[b]
+                .distance
+                .total_cmp(&report.pairs[a].distance)
+                .then(a.cmp(&b))
+        });
+        rest.truncate(SHORT_TABLE_ROWS);
+        rest.sort_unstable();
+        let occluded = report.pairs.iter().filter(|p| p.occluded).count();
+        let unreachable = report.pairs.iter().filter(|p| p.unreachable).count();
+        let _ = writeln!(
+            s,
+            "   … {} more pair(s) in the report ({occluded} occluded, {unreachable} unreachable in all); the {} farthest from their targets:",
+            n - SHORT_TABLE_ROWS,
+            rest.len()
+        );
+        for i in rest {
+            row(&mut s, i);
+        }
     }
     let _ = writeln!(
         s,

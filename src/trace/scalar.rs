@@ -47,6 +47,9 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
     let mut occluded = origin.y < 0.0;
     let mut nearest = (plane_distance(y.x).abs(), y);
     let mut steps = 0u64;
+    // A stratified field keeps the ray in its vertical plane: the planar
+    // stepper gives the same steps with stages for the vertical part alone.
+    let planar = field.is_stratified();
 
     let finish = |endpoint: V3<T>, v: V3, s: f64, end: End, occluded: bool, stats: Stats| Trace {
         endpoint,
@@ -72,7 +75,12 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
         }
         steps += 1;
         stepper.limit(field.step_limit(y.x.y.val(), y.v.y.val()));
-        let (y1, f1, h) = match stepper.attempt(field, &y, &f, &mut stats.rhs_evaluations) {
+        let attempt = if planar {
+            stepper.attempt_planar(field, &y, &f, &mut stats.rhs_evaluations)
+        } else {
+            stepper.attempt(field, &y, &f, &mut stats.rhs_evaluations)
+        };
+        let (y1, f1, h) = match attempt {
             Attempt::Accepted(y1, f1, h) => (y1, f1, h),
             Attempt::Rejected => {
                 stats.rejected_steps += 1;

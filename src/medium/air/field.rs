@@ -58,7 +58,7 @@ enum Profile<T> {
 
 impl<T: Real> Profile<T> {
     /// (T_u in kelvins, dT_u/dh) at height h.
-    #[inline]
+    #[inline(always)]
     fn kelvin(&self, h: T) -> (T, T) {
         match self {
             Profile::Terms {
@@ -214,6 +214,7 @@ impl<T: Real> AirField<T> {
     }
 
     /// The pressure (Pa) and its height derivative at h.
+    #[inline]
     pub fn pressure(&self, h: T) -> (T, T) {
         match &self.pressure {
             Pressure::Constant(p) => (*p, T::cst(0.0)),
@@ -222,6 +223,7 @@ impl<T: Real> AirField<T> {
     }
 
     /// The temperature (K) at p and its gradient.
+    #[inline]
     pub fn kelvin(&self, p: V3<T>) -> (T, V3<T>) {
         let (tu, dtu) = self.profile.kelvin(p.y);
         let zero = T::cst(0.0);
