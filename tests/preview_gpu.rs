@@ -87,6 +87,36 @@ fn with_medium(file: &str, medium: &str) -> Scene {
     Scene::parse(&value.to_string(), &path).unwrap()
 }
 
+/// With `MIRAGE_PARITY_DUMP=DIR`, writes the CPU and GPU images of a parity
+/// test and their difference (×8) as PNGs into DIR, to see where they differ.
+fn dump(
+    test: &str,
+    shading: Shading,
+    width: u32,
+    height: u32,
+    cpu: &[[f32; 3]],
+    gpu: &[[f32; 3]],
+    tone: ToneMap,
+) {
+    let Ok(dir) = std::env::var("MIRAGE_PARITY_DUMP") else {
+        return;
+    };
+    let png = |name: &str, f: &dyn Fn(usize, usize) -> u8| {
+        let img = image::RgbImage::from_fn(width, height, |x, y| {
+            let i = (y * width + x) as usize;
+            image::Rgb([f(i, 0), f(i, 1), f(i, 2)])
+        });
+        let path = Path::new(&dir).join(format!("{test}-{shading:?}-{name}.png"));
+        img.save(&path).unwrap();
+    };
+    png("cpu", &|i, c| tone.apply(cpu[i][c]));
+    png("gpu", &|i, c| tone.apply(gpu[i][c]));
+    png("diff", &|i, c| {
+        let d = (tone.apply(cpu[i][c]) as i32 - tone.apply(gpu[i][c]) as i32).unsigned_abs();
+        (d * 8).min(255) as u8
+    });
+}
+
 fn parity_of(test: &str, file: &str, scene: Scene, width: u32, height: u32) {
     let Some(gpu) = gpu(test) else { return };
     eprintln!("{test}: adapter {}", gpu.describe());
@@ -105,6 +135,7 @@ fn parity_of(test: &str, file: &str, scene: Scene, width: u32, height: u32) {
             Shading::Albedo => ToneMap::Clamp,
         };
         let (mean, share) = compare(&cpu.pixels, &gpu_pixels, tone);
+        dump(test, shading, width, height, &cpu.pixels, &gpu_pixels, tone);
         eprintln!(
             "{test}: {file} {shading:?} {width}×{height}: mean |GPU − CPU| = {:.3}/255, pixels off by > 0.05: {:.3} %",
             mean * 255.0,
@@ -155,7 +186,7 @@ fn gpu_matches_cpu_on_the_hot_road_in_real_air() {
 }
 
 #[test]
-#[ignore = "fails: mean 2.97/255 on albedo (1.7 % of pixels off); under investigation"]
+#[ignore = "fails: mean 2.97/255 on albedo (1.7 % of pixels off), a band just below the horizon that the GPU sees as sky and the CPU as sea; the inversion term alone (Gladstone-Dale, constant pressure) gives 12.4/255, the surface layer alone passes; under investigation"]
 fn gpu_matches_cpu_on_stratified_real_air() {
     // Ciddor, a warm surface layer and an inversion aloft, over the sea scene.
     let scene = with_medium(
