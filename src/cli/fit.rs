@@ -4,7 +4,7 @@
 use super::trace::describe_trace;
 use crate::error::Result;
 use crate::fit::report::FitReport;
-use crate::io::{check_not_input, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_json};
 use crate::problem::Problem;
 use crate::problem::SolverMethod;
 use std::fmt::Write as _;
@@ -40,15 +40,16 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
     if let Some(m) = options.method {
         problem.solver.method = m;
     }
-    for out in [&options.output, &options.plot, &options.rays]
+    check_outputs(
+        [
+            Output::optional("-o", options.output.as_ref(), OutputKind::Any),
+            Output::optional("--plot", options.plot.as_ref(), OutputKind::Plot),
+            Output::optional("--rays", options.rays.as_ref(), OutputKind::Plot),
+        ]
         .into_iter()
-        .flatten()
-    {
-        check_not_input(out, &[problem_path])?;
-    }
-    for plot in [&options.plot, &options.rays].into_iter().flatten() {
-        crate::plot::ImageFormat::from_path(plot)?;
-    }
+        .flatten(),
+        &[problem_path],
+    )?;
     let bar = (!options.quiet).then(|| {
         let bar = indicatif::ProgressBar::new_spinner();
         bar.set_style(
