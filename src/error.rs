@@ -171,8 +171,9 @@ pub enum Error {
         /// The driver's or library's message.
         message: String,
     },
-    /// A check the user asked for was missed, e.g. `mirage compare --min-psnr`
-    /// (exit code 1).
+    /// A check the user asked for was missed, e.g. `mirage compare --min-psnr`,
+    /// or a fit that ends above the `target_objective` its problem sets (exit
+    /// code 1).
     #[error("{subject}: {}", missed.join("; "))]
     LimitsMissed {
         /// What was checked (`ours.png vs ref.exr`).

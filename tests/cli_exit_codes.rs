@@ -1,7 +1,9 @@
-//! Early checks: every command that writes files refuses a bad output path
-//! (missing folder, wrong extension, an input, a repeated output) in under a
-//! second, naming the flag and the path, before a fit or render that would
-//! take much longer.
+//! Exit codes and early checks: `mirage fit` exits 1 when F ends above a target
+//! objective the problem or `--target-objective` sets (0 when none is set), the
+//! codes are in `--help`, and every command that writes files refuses a bad
+//! output path (missing folder, wrong extension, an input, a repeated output)
+//! in under a second, naming the flag and the path, before a fit or render
+//! that would take much longer.
 
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -32,6 +34,117 @@ fn problem_in(dir: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf 
     let path = dir.join(format!("{name}.json"));
     std::fs::write(&path, v.to_string()).unwrap();
     path
+}
+
+fn fit(problem: &Path, out: &Path, extra: &[&str]) -> Output {
+    mirage()
+        .args(["--threads", "1", "fit", "-q"])
+        .arg(problem)
+        .arg("-o")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn result(out: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap()
+}
+
+#[test]
+fn a_fit_above_the_target_the_problem_sets_exits_1_after_writing_its_result() {
+    let dir = tempfile::tempdir().unwrap();
+    // LM ends near 5e-27 m² on hot-road: a target of 1e-30 is out of reach.
+    let p = problem_in(dir.path(), "hot-road", |v| {
+        v["solver"] = json!({ "method": "lm", "target_objective": 1e-30 });
+    });
+    let out = dir.path().join("r.json");
+    let o = fit(&p, &out, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("ABOVE target"), "the summary is printed: {t}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("hot-road.json")
+            && err.contains("above the target objective 1e-30 m² (solver.target_objective)"),
+        "{err}"
+    );
+    let r = result(&out);
+    assert_eq!(r["solver"]["reached_target"], json!(false));
+    assert_eq!(r["solver"]["target_enforced"], json!(true));
+
+    // The flag overrides the file, either way.
+    let o = fit(&p, &out, &["--target-objective", "1e-10"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(result(&out)["solver"]["reached_target"], json!(true));
+    let plain = root().join("problems/hot-road.json");
+    let o = fit(&plain, &out, &["--method", "lm", "--target-objective", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("(--target-objective)"), "{}", text(&o));
+}
+
+#[test]
+fn a_fit_with_no_target_set_exits_0_even_above_the_default() {
+    let dir = tempfile::tempdir().unwrap();
+    // One target moved by 10 cm: F cannot reach the default 1e-12 m².
+    let p = problem_in(dir.path(), "hot-road", |v| {
+        let y = v["pairs"][1]["target"][1].as_f64().unwrap();
+        v["pairs"][1]["target"][1] = json!(y + 0.1);
+        v["solver"] = json!({ "method": "lm" });
+    });
+    let out = dir.path().join("r.json");
+    let o = fit(&p, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        text(&o).contains("above the default target"),
+        "{}",
+        text(&o)
+    );
+    let r = result(&out);
+    assert_eq!(r["solver"]["reached_target"], json!(false));
+    assert_eq!(r["solver"]["target_enforced"], json!(false));
+    // A bundled problem meets its (default) target and exits 0.
+    let o = fit(&root().join("problems/hot-road.json"), &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}
+
+#[test]
+fn a_bad_target_flag_exits_2_naming_it() {
+    for bad in ["-1", "nan", "inf", "small"] {
+        let o = mirage()
+            .args(["fit", "problems/hot-road.json", "--target-objective", bad])
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", text(&o));
+        assert!(text(&o).contains("--target-objective"), "{}", text(&o));
+    }
+}
+
+#[test]
+fn the_exit_codes_are_in_the_help() {
+    let o = mirage().arg("--help").output().unwrap();
+    let t = text(&o);
+    assert!(o.status.success());
+    for line in [
+        "Exit codes:",
+        "  0  ",
+        "  1  ",
+        "  2  ",
+        "--target-objective",
+    ] {
+        assert!(
+            t.contains(line),
+            "{line:?} missing from mirage --help:\n{t}"
+        );
+    }
+    let o = mirage().args(["fit", "--help"]).output().unwrap();
+    let t = text(&o);
+    assert!(
+        t.contains("Exit codes:") && t.contains("F ended above the target objective"),
+        "{t}"
+    );
+    assert!(t.contains("--target-objective"), "{t}");
 }
 
 /// Runs `cmd` and asserts it exits 2 within a second with one line that starts

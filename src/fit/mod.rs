@@ -84,6 +84,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
             converged: best.converged,
             reached_target: traced.totals.objective <= settings.target_objective,
             target_objective: settings.target_objective,
+            target_enforced: settings.target_enforced,
         },
         runs: solution
             .runs

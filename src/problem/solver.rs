@@ -30,8 +30,9 @@ pub struct SolverSpec {
     /// Seed of the starting points (restarts are reproducible).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
-    /// Objective F (m²) below which a fit counts as reaching its targets; above
-    /// it, `auto` restarts and Nelder–Mead stops.
+    /// Objective F (m²) at or below which a fit counts as reaching its targets
+    /// and Nelder–Mead stops; above it, `auto` restarts. Set here, a fit that
+    /// ends above it fails (exit code 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_objective: Option<f64>,
     /// Size of the simplex, relative to the starting one, below which
@@ -107,6 +108,11 @@ pub struct SolverSettings {
     pub seed: u64,
     /// F (m²) below which the targets count as reached.
     pub target_objective: f64,
+    /// Whether a fit that ends above `target_objective` fails (exit code 1):
+    /// the problem file sets it (or `mirage fit --target-objective` does). The
+    /// default target steers `auto` and stops Nelder–Mead, but failing on it
+    /// would fail every fit of targets that cannot all be met.
+    pub target_enforced: bool,
     /// Nelder–Mead stops when its simplex is this small relative to the
     /// starting one (`crate::fit::nelder_mead`).
     pub simplex_xtol: f64,
@@ -169,6 +175,7 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         gtol: tol("gtol", spec.gtol, 1e-15)?,
         seed: spec.seed.unwrap_or(0x6d69_7261_6765),
         target_objective: tol("target_objective", spec.target_objective, 1e-12)?,
+        target_enforced: spec.target_objective.is_some(),
         simplex_xtol: tol("simplex_xtol", spec.simplex_xtol, DEFAULT_SIMPLEX_XTOL)?,
         simplex_ftol: tol("simplex_ftol", spec.simplex_ftol, DEFAULT_SIMPLEX_FTOL)?,
     })
