@@ -26,7 +26,7 @@
 //! over the threshold exactly when it is past the orange at the middle of the ramp.
 
 use crate::error::{Error, FieldError, Result};
-use crate::io::{check_not_input, write_atomic, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_atomic, write_json};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -476,19 +476,15 @@ pub fn table(m: &Metrics) -> String {
 pub fn compare_command(o: &CompareOptions) -> Result<Metrics> {
     let threshold = o.threshold.unwrap_or(DEFAULT_THRESHOLD);
     let inputs = [o.ours.as_path(), o.reference.as_path()];
-    if let Some(d) = &o.diff {
-        if crate::plot::ImageFormat::from_path(d)? != crate::plot::ImageFormat::Png {
-            return Err(Error::input(
-                d,
-                "-",
-                "the heat map is a raster image: use .png",
-            ));
-        }
-        check_not_input(d, &inputs)?;
-    }
-    if let Some(j) = &o.json {
-        check_not_input(j, &inputs)?;
-    }
+    check_outputs(
+        [
+            Output::optional("--diff", o.diff.as_ref(), OutputKind::Png("the heat map")),
+            Output::optional("--json", o.json.as_ref(), OutputKind::Any),
+        ]
+        .into_iter()
+        .flatten(),
+        &inputs,
+    )?;
     let ours = load(&o.ours)?;
     let reference = load(&o.reference)?;
     if (ours.width, ours.height) != (reference.width, reference.height) {

@@ -19,7 +19,7 @@
 //! lookup to be accurate. [`lookup_error`] measures it; `mirage sky` prints it.
 
 use crate::error::{Error, Result};
-use crate::io::{check_not_input, write_atomic};
+use crate::io::{Output, OutputKind, check_outputs, write_atomic};
 use crate::render::sky::{Sky, SkyModel};
 use crate::scene::Scene;
 use glam::DVec3;
@@ -143,20 +143,12 @@ fn side_message(v: u32) -> String {
 /// lookup error within ±2° of the horizon.
 pub fn sky_command(o: &SkyOptions) -> Result<f64> {
     let scene = Scene::load(&o.scene)?;
-    let ext = o
-        .output
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if ext.as_deref() != Some("exr") {
-        return Err(Error::input(
-            &o.output,
-            "-",
-            "the sky map is written as .exr",
-        ));
-    }
     let mut inputs: Vec<&Path> = vec![o.scene.as_path()];
     inputs.extend(scene.inputs.iter().map(PathBuf::as_path));
-    check_not_input(&o.output, &inputs)?;
+    check_outputs(
+        [Output::new("-o", &o.output, OutputKind::Exr("the sky map"))],
+        &inputs,
+    )?;
     let width = o.width.unwrap_or(1024);
     let height = o.height.unwrap_or(width.div_ceil(2));
     // The flags are in range; the height derived from a width of 2 is not.

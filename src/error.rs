@@ -5,10 +5,13 @@
 //!   validator of a part returns paths relative to that part; the caller prefixes
 //!   them with [`FieldError::within`] as the error travels up.
 //! - [`Error`] is what a command returns. Bad input is [`Error::Input`] (a
-//!   [`FieldError`] and the file it came from) or [`Error::Usage`] (a command-line
-//!   flag): one line naming the file or flag, the field and what is wrong, exit
-//!   code 2. Everything else (files that cannot be read or written, images that
-//!   cannot be encoded, the GPU, the solver) has a typed variant and exit code 1.
+//!   [`FieldError`] and the file it came from), [`Error::Usage`] (a command-line
+//!   flag) or [`Error::Output`] (an output path that cannot be written, found
+//!   before the work starts): one line naming the file or flag, the field or
+//!   path and what is wrong, exit code 2. A check the user asked for that the
+//!   result misses ([`Error::LimitsMissed`]) is exit code 1; everything else
+//!   (files that cannot be read or written, images that cannot be encoded, the
+//!   GPU, the solver) has a typed variant and exit code 1 too.
 
 use std::path::{Path, PathBuf};
 
@@ -131,6 +134,18 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// An output path is unusable: its folder is missing, it names an input or
+    /// another output, its extension is not one the output can have (exit
+    /// code 2; found before the work starts, `crate::io::check_outputs`).
+    #[error("{flag} {}: {message}", path.display())]
+    Output {
+        /// The flag that named it (`-o`, `--plot`).
+        flag: String,
+        /// The path as given.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// Reading or writing a file failed (exit code 1).
     #[error("{}: {source}", path.display())]
     Io {
@@ -156,8 +171,9 @@ pub enum Error {
         /// The driver's or library's message.
         message: String,
     },
-    /// A check the user asked for was missed, e.g. `mirage compare --min-psnr`
-    /// (exit code 1).
+    /// A check the user asked for was missed, e.g. `mirage compare --min-psnr`,
+    /// or a fit that ends above the `target_objective` its problem sets (exit
+    /// code 1).
     #[error("{subject}: {}", missed.join("; "))]
     LimitsMissed {
         /// What was checked (`ours.png vs ref.exr`).
@@ -213,11 +229,11 @@ impl Error {
         }
     }
 
-    /// The process exit code for this error: 2 for bad input (a file or a flag),
-    /// 1 for everything else.
+    /// The process exit code for this error: 2 for bad input (a file, a flag
+    /// or an output path), 1 for everything else.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Input { .. } | Error::Usage { .. } => 2,
+            Error::Input { .. } | Error::Usage { .. } | Error::Output { .. } => 2,
             Error::Io { .. }
             | Error::Encode { .. }
             | Error::Gpu { .. }

@@ -319,6 +319,18 @@ fn bad_trace_and_solver_settings() {
         &edit(r#""max_iterations": 50"#, r#""max_iterations": -5"#),
         &["solver.max_iterations"],
     );
+    rejects(
+        &edit(r#""max_iterations": 50"#, r#""simplex_xtol": -1e-9"#),
+        &["solver.simplex_xtol", "≥ 0"],
+    );
+    rejects(
+        &edit(r#""max_iterations": 50"#, r#""simplex_ftol": "tight""#),
+        &["solver.simplex_ftol"],
+    );
+    rejects(
+        &edit(r#""max_iterations": 50"#, r#""simplex_tol": 1e-9"#),
+        &["solver", "simplex_tol", "simplex_xtol"],
+    );
 }
 
 #[test]

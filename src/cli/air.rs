@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result, ValueError};
 use crate::io::json::{parse_json, read_input};
-use crate::io::{check_not_input, write_atomic, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_atomic, write_json};
 use crate::medium::Medium;
 use crate::problem::Problem;
 use crate::profile::{AirProfile, air_profile};
@@ -98,12 +98,16 @@ pub fn load_medium(path: &Path) -> Result<(String, Medium, Vec<PathBuf>)> {
 pub fn run(o: &AirOptions) -> Result<AirProfile> {
     let (name, medium, inputs) = load_medium(&o.file)?;
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    for out in [&o.output, &o.csv, &o.plot].into_iter().flatten() {
-        check_not_input(out, &inputs)?;
-    }
-    if let Some(p) = &o.plot {
-        crate::plot::ImageFormat::from_path(p)?;
-    }
+    check_outputs(
+        [
+            Output::optional("-o", o.output.as_ref(), OutputKind::Any),
+            Output::optional("--csv", o.csv.as_ref(), OutputKind::Any),
+            Output::optional("--plot", o.plot.as_ref(), OutputKind::Plot),
+        ]
+        .into_iter()
+        .flatten(),
+        &inputs,
+    )?;
     let profile = air_profile(&medium, o.at, o.top);
     for w in &profile.warnings {
         eprintln!("warning: {}", w.message);

@@ -1,10 +1,19 @@
 //! `mirage fit`: the free parameters fitted so that every pair's ray lands on
 //! its target.
+//!
+//! Exit codes: 0 when the fit ran (and, if the problem's `solver` section or
+//! `--target-objective` sets a target objective, F ended at or below it); 1
+//! when F ended above a target so set (the outputs are written all the same,
+//! as `mirage compare` writes its evidence before failing), or the solver or
+//! an output failed; 2 for bad input (the problem, a flag, an output path,
+//! all checked before the fit starts). A fit with no target set steers by
+//! the default target (1e-12 m²) but does not fail on it: a problem whose
+//! targets cannot all be met would otherwise never exit 0.
 
 use super::trace::describe_trace;
-use crate::error::Result;
+use crate::error::{Error, Result, ValueError};
 use crate::fit::report::FitReport;
-use crate::io::{check_not_input, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_json};
 use crate::problem::Problem;
 use crate::problem::SolverMethod;
 use std::fmt::Write as _;
@@ -27,28 +36,53 @@ pub struct FitOptions {
     /// Solver (overrides the problem file).
     #[arg(long, value_enum)]
     pub method: Option<SolverMethod>,
+    /// Target objective F in m², finite ≥ 0 (overrides the problem file's
+    /// `solver.target_objective`): the fit exits with code 1 if it ends above it.
+    #[arg(long, allow_negative_numbers = true, value_parser = target_objective)]
+    pub target_objective: Option<f64>,
     /// No progress line.
     #[arg(long, short)]
     pub quiet: bool,
 }
 
+/// `--target-objective`: a finite F ≥ 0 (m²).
+fn target_objective(s: &str) -> std::result::Result<f64, ValueError> {
+    let v: f64 = s.trim().parse().map_err(|_| ValueError::NotANumber {
+        value: s.to_string(),
+    })?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(ValueError::OutOfRange {
+            rule: format!("must be a finite number ≥ 0 (m²), got {v}"),
+        })
+    }
+}
+
 /// Fits the free parameters, prints a summary, writes the result and plots.
-/// All outputs are checked before the fit and written atomically.
+/// All outputs are checked before the fit and written atomically. A fit that
+/// ends above a target objective the problem or `--target-objective` sets is
+/// [`Error::LimitsMissed`] (exit code 1), after the outputs are written.
 pub fn run(options: &FitOptions) -> Result<FitReport> {
     let problem_path = options.problem.as_path();
     let mut problem = Problem::load(problem_path)?;
     if let Some(m) = options.method {
         problem.solver.method = m;
     }
-    for out in [&options.output, &options.plot, &options.rays]
+    if let Some(t) = options.target_objective {
+        problem.solver.target_objective = t;
+        problem.solver.target_enforced = true;
+    }
+    check_outputs(
+        [
+            Output::optional("-o", options.output.as_ref(), OutputKind::Any),
+            Output::optional("--plot", options.plot.as_ref(), OutputKind::Plot),
+            Output::optional("--rays", options.rays.as_ref(), OutputKind::Plot),
+        ]
         .into_iter()
-        .flatten()
-    {
-        check_not_input(out, &[problem_path])?;
-    }
-    for plot in [&options.plot, &options.rays].into_iter().flatten() {
-        crate::plot::ImageFormat::from_path(plot)?;
-    }
+        .flatten(),
+        &[problem_path],
+    )?;
     let bar = (!options.quiet).then(|| {
         let bar = indicatif::ProgressBar::new_spinner();
         bar.set_style(
@@ -81,6 +115,22 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;
     }
     print!("{}", fit_summary(&problem, &report));
+    let sv = &report.solver;
+    if sv.target_enforced && !sv.reached_target {
+        return Err(Error::LimitsMissed {
+            subject: options.problem.display().to_string(),
+            missed: vec![format!(
+                "F = {:.6e} m² is above the target objective {:e} m² ({})",
+                report.totals.objective,
+                sv.target_objective,
+                if options.target_objective.is_some() {
+                    "--target-objective"
+                } else {
+                    "solver.target_objective"
+                }
+            )],
+        });
+    }
     Ok(report)
 }
 
@@ -112,7 +162,11 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
         s,
         "objective F = {:.6e} m² ({} target {:.1e})   summed distance = {:.4e} m   largest = {:.4e} m",
         r.totals.objective,
-        if sv.reached_target { "meets" } else { "ABOVE" },
+        match (sv.reached_target, sv.target_enforced) {
+            (true, _) => "meets",
+            (false, true) => "ABOVE",
+            (false, false) => "above the default",
+        },
         sv.target_objective,
         r.totals.summed_distance,
         r.totals.max_distance

@@ -5,6 +5,14 @@
 //! is checked by its clap value parser; a check that needs several flags is done
 //! by the command and reported as [`Error::Usage`]. A value a parser refuses is
 //! reported like a usage error, one line naming the flag ([`parse_error`]).
+//!
+//! Exit codes ([`EXIT_CODES`], printed by `mirage --help`): 0 when the command
+//! did its work and every check asked of it passed; 1 when a check asked of
+//! it failed (`mirage compare`'s limits, `mirage fit`'s target objective when
+//! the problem or `--target-objective` sets one; the outputs are still
+//! written) or the work itself failed (a file could not be written, the GPU,
+//! the solver); 2 for bad input (a file, a flag, an output path), found before
+//! any work starts ([`crate::io::check_outputs`]).
 
 pub mod air;
 pub mod compare;
@@ -22,12 +30,37 @@ use crate::error::{Error, Result};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use std::process::ExitCode;
 
+/// What each exit code means, for every command (the end of `mirage --help`).
+pub const EXIT_CODES: &str = "\
+Exit codes:
+  0  done, and every check asked for passed
+  1  a check asked for failed (compare: a --max-*/--min-* limit; fit: F above the
+     target objective that the problem's solver.target_objective or
+     --target-objective sets; the outputs are written all the same), or the
+     work failed (writing a file, the GPU, the solver)
+  2  bad input: a problem or scene file, a flag, or an output path (its folder
+     missing, its extension wrong, an input's path), all checked before any
+     work starts";
+
+/// The exit codes of `mirage fit` (the end of `mirage fit --help`).
+pub const FIT_EXIT_CODES: &str = "\
+Exit codes:
+  0  the fit ran, and F is at or below the target objective if one is set
+     (solver.target_objective in the problem, or --target-objective); with
+     none set, the default target (1e-12 m²) steers the solver but does not
+     fail the fit
+  1  F ended above the target objective so set (the outputs are written all
+     the same; the result's solver.reached_target is false), or writing an
+     output or the solver failed
+  2  bad input: the problem, a flag, or an output path (checked before the fit)";
+
 /// The whole command line.
 #[derive(Debug, clap::Parser)]
 #[command(
     name = "mirage",
     version,
-    about = "Inverse design of atmospheric mirages"
+    about = "Inverse design of atmospheric mirages",
+    after_help = EXIT_CODES
 )]
 pub struct Cli {
     /// Worker threads (default: all cores).
@@ -44,6 +77,7 @@ pub enum Command {
     /// Trace every point pair through the problem's medium and report endpoints.
     Trace(trace::TracePairsOptions),
     /// Fit the free parameters so that every pair's ray lands on its target.
+    #[command(after_help = FIT_EXIT_CODES)]
     Fit(fit::FitOptions),
     /// Measure the speed/accuracy trade of the integrators on a problem.
     Tradeoff(tradeoff::TradeoffOptions),

@@ -1,7 +1,7 @@
 //! `mirage rays`: the ray diagram of a problem's pairs through its medium.
 
 use crate::error::Result;
-use crate::io::check_not_input;
+use crate::io::{Output, OutputKind, check_outputs};
 use crate::problem::Problem;
 use std::path::PathBuf;
 
@@ -18,6 +18,9 @@ pub struct RaysOptions {
 /// Draws the diagram of the problem's own medium to `output`.
 pub fn run(o: &RaysOptions) -> Result<()> {
     let problem = Problem::load(&o.problem)?;
-    check_not_input(&o.output, &[o.problem.as_path()])?;
+    check_outputs(
+        [Output::new("-o", &o.output, OutputKind::Plot)],
+        &[o.problem.as_path()],
+    )?;
     crate::plot::draw_rays(&problem, &problem.medium, &o.output)
 }

@@ -2,7 +2,7 @@
 
 use crate::error::Result;
 use crate::evaluate::{TraceReport, trace_pairs};
-use crate::io::{check_not_input, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_json};
 use crate::problem::Problem;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -29,9 +29,10 @@ const SHORT_TABLE_ROWS: usize = 10;
 /// and writes the JSON report to `output` if given.
 pub fn run(o: &TracePairsOptions) -> Result<TraceReport> {
     let problem = Problem::load(&o.problem)?;
-    if let Some(out) = &o.output {
-        check_not_input(out, &[o.problem.as_path()])?;
-    }
+    check_outputs(
+        Output::optional("-o", o.output.as_ref(), OutputKind::Any),
+        &[o.problem.as_path()],
+    )?;
     let report = trace_pairs(&problem, &problem.medium);
     if let Some(out) = &o.output {
         write_json(out, &report)?;

@@ -1,7 +1,7 @@
 //! `mirage tradeoff`: the speed/accuracy trade of the integrators on a problem.
 
 use crate::error::Result;
-use crate::io::{check_not_input, write_json};
+use crate::io::{Output, OutputKind, check_outputs, write_json};
 use crate::problem::Problem;
 use crate::tradeoff::Tradeoff;
 use std::path::PathBuf;
@@ -30,12 +30,16 @@ pub struct TradeoffOptions {
 /// a Pareto plot where asked. All outputs are checked before measuring.
 pub fn run(o: &TradeoffOptions) -> Result<Tradeoff> {
     let problem = Problem::load(&o.problem)?;
-    for out in [&o.output, &o.csv, &o.plot].into_iter().flatten() {
-        check_not_input(out, &[o.problem.as_path()])?;
-    }
-    if let Some(p) = &o.plot {
-        crate::plot::ImageFormat::from_path(p)?;
-    }
+    check_outputs(
+        [
+            Output::optional("-o", o.output.as_ref(), OutputKind::Any),
+            Output::optional("--csv", o.csv.as_ref(), OutputKind::Any),
+            Output::optional("--plot", o.plot.as_ref(), OutputKind::Plot),
+        ]
+        .into_iter()
+        .flatten(),
+        &[o.problem.as_path()],
+    )?;
     let fit = !o.no_fit;
     if fit {
         crate::tradeoff::check_fit(&problem)?;

@@ -1,11 +1,12 @@
 //! Fitting the free parameters to the point pairs: the residual map with exact
-//! Jacobians ([`objective`]), Levenberg–Marquardt as an argmin solver ([`lm`]),
-//! the strategies that run it and Nelder–Mead ([`solve`]), and what the pairs
-//! cannot determine ([`identify`]).
+//! Jacobians ([`objective`]), Levenberg–Marquardt and Nelder–Mead as argmin
+//! solvers ([`lm`], [`nelder_mead`]), the strategies that run them
+//! ([`solve`]), and what the pairs cannot determine ([`identify`]).
 
 pub mod history;
 pub mod identify;
 pub mod lm;
+pub mod nelder_mead;
 pub mod objective;
 pub mod report;
 pub mod solve;
@@ -83,6 +84,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
             converged: best.converged,
             reached_target: traced.totals.objective <= settings.target_objective,
             target_objective: settings.target_objective,
+            target_enforced: settings.target_enforced,
         },
         runs: solution
             .runs

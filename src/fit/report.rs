@@ -70,6 +70,10 @@ pub struct SolverReport {
     pub reached_target: bool,
     /// The target objective (m²).
     pub target_objective: f64,
+    /// Whether the problem (or `mirage fit --target-objective`) sets the
+    /// target, so that a fit above it fails (exit code 1); a default target
+    /// does not.
+    pub target_enforced: bool,
 }
 
 /// The result of `mirage fit` (`docs/problem-format.md`, "The result of a fit").

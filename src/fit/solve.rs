@@ -1,8 +1,17 @@
 //! Running the solvers: Levenberg–Marquardt and Nelder–Mead under argmin's
 //! `Executor`, restarts in parallel, and the default strategy that combines them.
+//!
+//! Nelder–Mead stops at the target objective, when its simplex has collapsed,
+//! or when F is the same over the simplex ([`super::nelder_mead`], tolerances
+//! `simplex_xtol` and `simplex_ftol` of the problem's `solver` section), else
+//! at 20 × `max_iterations` (a simplex move costs one to n + 2 evaluations
+//! of F, an LM iteration one residual and one Jacobian). LM runs do not stop at
+//! the target: an LM run that meets it goes on to converge, which costs a few
+//! iterations and leaves the polished answer.
 
 use super::history::{IterationRecord, RunHistory};
 use super::lm::{LevenbergMarquardt, LmState};
+use super::nelder_mead::{NelderMead, NmStop};
 use super::objective::Objective;
 use crate::error::Error;
 use crate::math::SplitMix64;
@@ -12,7 +21,6 @@ use argmin::core::{
     CostFunction, Error as ArgminError, Executor, IterState, Jacobian, KV, Operator, State,
     TerminationReason,
 };
-use argmin::solver::neldermead::NelderMead;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
@@ -270,13 +278,18 @@ pub fn run_lm(
     Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
 }
 
-/// One Nelder–Mead run from `x0`, inside the bounds.
+/// Nelder–Mead's iteration limit per `solver.max_iterations`.
+pub const NELDER_MEAD_ITERATIONS_PER_LM: u64 = 20;
+
+/// One Nelder–Mead run from `x0`, inside the bounds, that stops once F ≤
+/// `target` (m²) or the simplex has collapsed ([`super::nelder_mead`]).
 pub fn run_nelder_mead(
     objective: &Objective,
     settings: &SolverSettings,
     bounds: &[(f64, f64)],
     x0: &[f64],
     label: &str,
+    target: f64,
     hook: Option<IterateHook>,
 ) -> Result<Run, Error> {
     let map = BoxMap {
@@ -297,15 +310,20 @@ pub fn run_nelder_mead(
         simplex.push(DVector::from_vec(z));
     }
     let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-30)
+        .and_then(|s| s.with_target(target))
+        .and_then(|s| s.with_xtol(settings.simplex_xtol))
+        .and_then(|s| s.with_ftol(settings.simplex_ftol))
         .map_err(|e| solver_error(label, e))?;
+    let max_iters = settings
+        .max_iterations
+        .saturating_mul(NELDER_MEAD_ITERATIONS_PER_LM);
     let recorder = Recorder::new(label, Some(map.clone()), hook);
     let cost = Cost {
         objective,
         map: map.clone(),
     };
     let result = Executor::new(cost, solver)
-        .configure(|s| s.max_iters(settings.max_iterations.saturating_mul(20)))
+        .configure(|s| s.max_iters(max_iters))
         .add_observer(recorder.clone(), ObserverMode::Always)
         .timer(false)
         .run()
@@ -315,11 +333,17 @@ pub fn run_nelder_mead(
         .get_best_param()
         .map(|z| map.to_box(z.as_slice()))
         .unwrap_or_else(|| x0.to_vec());
-    let (reason, _) = describe(state.get_termination_reason());
-    let converged = matches!(
-        state.get_termination_reason(),
-        Some(TerminationReason::SolverConverged)
-    );
+    let (mut reason, _) = describe(state.get_termination_reason());
+    if let Some(TerminationReason::MaxItersReached) = state.get_termination_reason() {
+        reason = format!(
+            "{reason} ({max_iters} = {NELDER_MEAD_ITERATIONS_PER_LM} × solver.max_iterations) \
+             before F reached the target or the simplex collapsed"
+        );
+    }
+    let converged = state
+        .get_termination_reason()
+        .and_then(NmStop::from_reason)
+        .is_some();
     Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
 }
 
@@ -359,7 +383,8 @@ pub fn starting_points(
 ///
 /// `auto`: LM from the start; if it ends above `target` (F, m²), LM from
 /// `settings.starts` further starting points in parallel; if the best is still
-/// above `target`, Nelder–Mead from it, then LM to polish. Every run is kept.
+/// above `target`, Nelder–Mead from it (stopping at `target`), then LM to
+/// polish. `nelder-mead` also stops at `target`. Every run is kept.
 pub fn solve(
     objective: &Objective,
     settings: &SolverSettings,
@@ -377,6 +402,7 @@ pub fn solve(
             bounds,
             &x0,
             "nelder-mead",
+            target,
             hook,
         )?),
         SolverMethod::Auto => {
@@ -416,6 +442,7 @@ pub fn solve(
                         bounds,
                         &from,
                         "nelder-mead",
+                        target,
                         hook.clone(),
                     )?;
                     let polish_from = nm.end.clone();

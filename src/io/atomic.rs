@@ -1,7 +1,23 @@
 use crate::error::{Error, Result};
 use serde::Serialize;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The temporary file [`write_atomic`] writes `path` through: a hidden name
+/// with the process id, in the same folder (so the rename cannot cross file
+/// systems); `None` when `path` names no file.
+pub(super) fn temporary_path(path: &Path) -> Option<PathBuf> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name()?;
+    Some(dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    )))
+}
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a
 /// rename, so a reader never sees a partial file and a failure leaves nothing.
@@ -10,18 +26,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::input(path, "-", "the output path names no file"))?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let tmp = temporary_path(path).ok_or_else(|| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "the output path names no file",
+        ))
+    })?;
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
@@ -41,22 +51,4 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
         serde_json::to_string_pretty(value).map_err(|e| Error::encode("the result as JSON", e))?;
     text.push('\n');
     write_atomic(path, text.as_bytes())
-}
-
-/// Refuses an output path that is one of the inputs: an input is never
-/// overwritten.
-pub fn check_not_input(output: &Path, inputs: &[&Path]) -> Result<()> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    if let Some(out) = canon(output) {
-        for input in inputs {
-            if canon(input).as_ref() == Some(&out) {
-                return Err(Error::input(
-                    output,
-                    "-",
-                    "the output would overwrite an input file; choose another output path",
-                ));
-            }
-        }
-    }
-    Ok(())
 }

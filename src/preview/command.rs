@@ -5,8 +5,7 @@
 use super::gpu::Tracer;
 use super::pack::{View, pack};
 use crate::error::{Error, Result};
-use crate::io::{check_not_input, write_atomic};
-use crate::plot::ImageFormat;
+use crate::io::{Output, OutputKind, check_outputs, write_atomic};
 use crate::render::output::{ToneMap, encode_png};
 use crate::render::{RenderOptions, Shading};
 use crate::scene::Scene;
@@ -58,20 +57,6 @@ fn frame_count(s: &str) -> std::result::Result<u64, crate::error::ValueError> {
     crate::validate::at_least_one(s)
 }
 
-fn check_png(path: &Path, inputs: &[&Path]) -> Result<()> {
-    match ImageFormat::from_path(path)? {
-        ImageFormat::Png => {}
-        ImageFormat::Svg => {
-            return Err(Error::input(
-                path,
-                "-",
-                "previews are raster images: use a .png output",
-            ));
-        }
-    }
-    check_not_input(path, inputs)
-}
-
 /// The frame size for the options: both given, one given (the other from the
 /// scene's aspect ratio), or the scene's.
 fn frame_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
@@ -94,12 +79,23 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
     }
     let mut inputs: Vec<&Path> = vec![o.input.as_path()];
     inputs.extend(input.scene.inputs.iter().map(PathBuf::as_path));
-    if let Some(out) = &o.output {
-        check_png(out, &inputs)?;
-    }
-    if let Some(shot) = &o.screenshot {
-        check_png(shot, &inputs)?;
-    }
+    check_outputs(
+        [
+            Output::optional(
+                "--output",
+                o.output.as_ref(),
+                OutputKind::Png("a preview frame"),
+            ),
+            Output::optional(
+                "--screenshot",
+                o.screenshot.as_ref(),
+                OutputKind::Png("a screenshot"),
+            ),
+        ]
+        .into_iter()
+        .flatten(),
+        &inputs,
+    )?;
     if o.headless && (o.frames.is_some() || o.screenshot.is_some()) {
         return Err(Error::usage(
             if o.frames.is_some() {

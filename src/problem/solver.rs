@@ -30,10 +30,18 @@ pub struct SolverSpec {
     /// Seed of the starting points (restarts are reproducible).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
-    /// Objective F (m²) below which a fit counts as reaching its targets; above
-    /// it, `auto` restarts.
+    /// Objective F (m²) at or below which a fit counts as reaching its targets
+    /// and Nelder–Mead stops; above it, `auto` restarts. Set here, a fit that
+    /// ends above it fails (exit code 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_objective: Option<f64>,
+    /// Size of the simplex, relative to the starting one, below which
+    /// Nelder–Mead stops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simplex_xtol: Option<f64>,
+    /// Relative spread of F over the simplex below which Nelder–Mead stops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simplex_ftol: Option<f64>,
 }
 
 fn default_solver() -> String {
@@ -51,6 +59,8 @@ impl Default for SolverSpec {
             gtol: None,
             seed: None,
             target_objective: None,
+            simplex_xtol: None,
+            simplex_ftol: None,
         }
     }
 }
@@ -98,7 +108,26 @@ pub struct SolverSettings {
     pub seed: u64,
     /// F (m²) below which the targets count as reached.
     pub target_objective: f64,
+    /// Whether a fit that ends above `target_objective` fails (exit code 1):
+    /// the problem file sets it (or `mirage fit --target-objective` does). The
+    /// default target steers `auto` and stops Nelder–Mead, but failing on it
+    /// would fail every fit of targets that cannot all be met.
+    pub target_enforced: bool,
+    /// Nelder–Mead stops when its simplex is this small relative to the
+    /// starting one (`crate::fit::nelder_mead`).
+    pub simplex_xtol: f64,
+    /// Nelder–Mead stops when F differs over the simplex by less than this
+    /// times F.
+    pub simplex_ftol: f64,
 }
+
+/// Default of `simplex_xtol`: the simplex 1e-10 of its starting size, that is
+/// about 1e-11 of each parameter's value or range (`crate::fit::solve`'s
+/// starting simplex), near LM's `xtol`.
+pub const DEFAULT_SIMPLEX_XTOL: f64 = 1e-10;
+
+/// Default of `simplex_ftol`: F the same at every vertex to 1e-12 (relative).
+pub const DEFAULT_SIMPLEX_FTOL: f64 = 1e-12;
 
 /// Validates a `solver` section.
 pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings> {
@@ -146,5 +175,8 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         gtol: tol("gtol", spec.gtol, 1e-15)?,
         seed: spec.seed.unwrap_or(0x6d69_7261_6765),
         target_objective: tol("target_objective", spec.target_objective, 1e-12)?,
+        target_enforced: spec.target_objective.is_some(),
+        simplex_xtol: tol("simplex_xtol", spec.simplex_xtol, DEFAULT_SIMPLEX_XTOL)?,
+        simplex_ftol: tol("simplex_ftol", spec.simplex_ftol, DEFAULT_SIMPLEX_FTOL)?,
     })
 }

@@ -30,9 +30,8 @@ pub mod output;
 pub mod paths;
 pub mod sky;
 
-use crate::error::{Error, Result};
-use crate::io::{check_not_input, write_atomic};
-use crate::plot::ImageFormat;
+use crate::error::Result;
+use crate::io::{Output, OutputKind, check_outputs, write_atomic};
 use crate::scene::Scene;
 use accel::{Aabb, Counters, Grid, SceneDistance};
 use air::Air;
@@ -654,37 +653,17 @@ fn hit_fraction(s: &str) -> std::result::Result<f64, crate::error::ValueError> {
 /// EXR), atomically; prints a one-paragraph summary unless quiet.
 pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
     let scene = Scene::load(&o.scene)?;
-    match ImageFormat::from_path(&o.output)? {
-        ImageFormat::Png => {}
-        ImageFormat::Svg => {
-            return Err(Error::input(
-                &o.output,
-                "-",
-                "renders are raster images: use a .png output (and --exr for linear HDR)",
-            ));
-        }
-    }
-    if let Some(exr) = &o.exr {
-        let ext = exr
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if ext.as_deref() != Some("exr") {
-            return Err(Error::input(exr, "-", "the --exr output must end in .exr"));
-        }
-    }
     let mut inputs: Vec<&Path> = vec![o.scene.as_path()];
     inputs.extend(scene.inputs.iter().map(PathBuf::as_path));
-    check_not_input(&o.output, &inputs)?;
-    if let Some(exr) = &o.exr {
-        check_not_input(exr, &inputs)?;
-        if exr == &o.output {
-            return Err(Error::input(
-                exr,
-                "-",
-                "the EXR and PNG outputs must differ",
-            ));
-        }
-    }
+    check_outputs(
+        [
+            Some(Output::new("-o", &o.output, OutputKind::Png("a render"))),
+            Output::optional("--exr", o.exr.as_ref(), OutputKind::Exr("the HDR render")),
+        ]
+        .into_iter()
+        .flatten(),
+        &inputs,
+    )?;
     let mut options = RenderOptions {
         shading: if o.albedo {
             Shading::Albedo
