@@ -23,7 +23,7 @@ pub struct TracePairsOptions {
 /// terminal table is shortened (see [`trace_table`]).
 pub const SHORT_TABLE_ABOVE: usize = 40;
 /// How many of the first pairs, and of the farthest, a short table shows.
-const SHORT_TABLE_ROWS: usize = 10;
+pub const SHORT_TABLE_ROWS: usize = 10;
 
 /// Traces every pair with the problem's medium and settings, prints a table,
 /// and writes the JSON report to `output` if given.
