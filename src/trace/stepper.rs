@@ -329,10 +329,9 @@ impl Stepper {
                 Attempt::Accepted(y1, f1, *h)
             }
             Stepper::Dopri5 { .. } => {
-                let hs = self.step();
-                if hs <= 1e-12 * (1.0 + y.x.val().norm()) {
+                let Some(hs) = self.next_step(y) else {
                     return Attempt::Underflow;
-                }
+                };
                 let (y1, [_, k3, k4, k5, k6, k7]) =
                     dopri5_stages(y, f0, hs, |s| rate(field, s, evals));
                 // Error estimate from real parts only: the step sequence is then a
@@ -349,11 +348,7 @@ impl Stepper {
                     weighted(ks, |k| k.dv.y.val(), hs),
                     weighted(ks, |k| k.dv.z.val(), hs),
                 );
-                if self.control(hs, err_x.dot(err_x) + err_v.dot(err_v)) {
-                    Attempt::Accepted(y1, k7, hs)
-                } else {
-                    Attempt::Rejected
-                }
+                self.judge(hs, err_x, err_v, || (y1, k7))
             }
         }
     }
@@ -402,10 +397,9 @@ impl Stepper {
                 Attempt::Accepted(y1, f1, h)
             }
             Stepper::Dopri5 { .. } => {
-                let hs = self.step();
-                if hs <= 1e-12 * (1.0 + y.x.val().norm()) {
+                let Some(hs) = self.next_step(y) else {
                     return Attempt::Underflow;
-                }
+                };
                 let (v1, [_, k3, k4, k5, k6, k7]) = dopri5_stages(&v0, &k1, hs, |s| {
                     vertical_rate(field, hx, hz, s, &mut grad, evals)
                 });
@@ -418,20 +412,38 @@ impl Stepper {
                     error_sum([vz.val(); 6]) * hs,
                 );
                 let err_v = V3::new(0.0, weighted(ks, |k| k.a.val(), hs), 0.0);
-                if self.control(hs, err_x.dot(err_x) + err_v.dot(err_v)) {
-                    let (y1, f1) = finish(&v1, &k7, grad, hs, &DOPRI5_WEIGHTS);
-                    Attempt::Accepted(y1, f1, hs)
-                } else {
-                    Attempt::Rejected
-                }
+                self.judge(hs, err_x, err_v, || {
+                    finish(&v1, &k7, grad, hs, &DOPRI5_WEIGHTS)
+                })
             }
         }
     }
 
-    /// The adaptive stepper's current step.
-    fn step(&self) -> f64 {
-        match self {
+    /// The adaptive stepper's next step from `y`, or none where it has shrunk
+    /// below what f64 resolves at `y`'s distance from the origin.
+    fn next_step<T: Real>(&self, y: &RayState<T>) -> Option<f64> {
+        let hs = match self {
             Stepper::Rk4 { h } | Stepper::Dopri5 { h, .. } => *h,
+        };
+        (hs > 1e-12 * (1.0 + y.x.val().norm())).then_some(hs)
+    }
+
+    /// Accepts a Dormand–Prince step of `hs` with the error estimate
+    /// (`err_x`, `err_v`), building its end state and rate with `take` only
+    /// then, or rejects it; either way [`Stepper::control`] sets the next step.
+    #[inline]
+    fn judge<T>(
+        &mut self,
+        hs: f64,
+        err_x: V3,
+        err_v: V3,
+        take: impl FnOnce() -> (RayState<T>, RayRate<T>),
+    ) -> Attempt<T> {
+        if self.control(hs, err_x.dot(err_x) + err_v.dot(err_v)) {
+            let (y1, f1) = take();
+            Attempt::Accepted(y1, f1, hs)
+        } else {
+            Attempt::Rejected
         }
     }
 
