@@ -5,6 +5,7 @@
 use super::state::{RayRate, RayState, rate};
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
+use crate::trace::fastexp::pow_neg_fifth;
 
 /// How rays are integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,12 +121,12 @@ fn dopri5_stages<S: Stage>(
 }
 
 /// Dormand–Prince's 5th-order weights, for the horizontal part of a planar step.
-const DOPRI5_WEIGHTS: [f64; 5] = [B1, B3, B4, B5, B6];
+pub(crate) const DOPRI5_WEIGHTS: [f64; 5] = [B1, B3, B4, B5, B6];
 
 /// The error estimate's weighted sum of one component of the rates
 /// k1, k3 … k7, in the order the 3-D estimate adds them.
 #[inline(always)]
-fn error_sum(k: [f64; 6]) -> f64 {
+pub(crate) fn error_sum(k: [f64; 6]) -> f64 {
     k[0] * E1 + k[1] * E3 + k[2] * E4 + k[3] * E5 + k[4] * E6 + k[5] * E7
 }
 
@@ -252,33 +253,33 @@ pub(crate) enum Stepper {
 }
 
 // Dormand–Prince 5(4) tableau (Hairer, Nørsett & Wanner, "Solving ODEs I").
-const A21: f64 = 1.0 / 5.0;
-const A31: f64 = 3.0 / 40.0;
-const A32: f64 = 9.0 / 40.0;
-const A41: f64 = 44.0 / 45.0;
-const A42: f64 = -56.0 / 15.0;
-const A43: f64 = 32.0 / 9.0;
-const A51: f64 = 19372.0 / 6561.0;
-const A52: f64 = -25360.0 / 2187.0;
-const A53: f64 = 64448.0 / 6561.0;
-const A54: f64 = -212.0 / 729.0;
-const A61: f64 = 9017.0 / 3168.0;
-const A62: f64 = -355.0 / 33.0;
-const A63: f64 = 46732.0 / 5247.0;
-const A64: f64 = 49.0 / 176.0;
-const A65: f64 = -5103.0 / 18656.0;
-const B1: f64 = 35.0 / 384.0;
-const B3: f64 = 500.0 / 1113.0;
-const B4: f64 = 125.0 / 192.0;
-const B5: f64 = -2187.0 / 6784.0;
-const B6: f64 = 11.0 / 84.0;
+pub(crate) const A21: f64 = 1.0 / 5.0;
+pub(crate) const A31: f64 = 3.0 / 40.0;
+pub(crate) const A32: f64 = 9.0 / 40.0;
+pub(crate) const A41: f64 = 44.0 / 45.0;
+pub(crate) const A42: f64 = -56.0 / 15.0;
+pub(crate) const A43: f64 = 32.0 / 9.0;
+pub(crate) const A51: f64 = 19372.0 / 6561.0;
+pub(crate) const A52: f64 = -25360.0 / 2187.0;
+pub(crate) const A53: f64 = 64448.0 / 6561.0;
+pub(crate) const A54: f64 = -212.0 / 729.0;
+pub(crate) const A61: f64 = 9017.0 / 3168.0;
+pub(crate) const A62: f64 = -355.0 / 33.0;
+pub(crate) const A63: f64 = 46732.0 / 5247.0;
+pub(crate) const A64: f64 = 49.0 / 176.0;
+pub(crate) const A65: f64 = -5103.0 / 18656.0;
+pub(crate) const B1: f64 = 35.0 / 384.0;
+pub(crate) const B3: f64 = 500.0 / 1113.0;
+pub(crate) const B4: f64 = 125.0 / 192.0;
+pub(crate) const B5: f64 = -2187.0 / 6784.0;
+pub(crate) const B6: f64 = 11.0 / 84.0;
 // Difference between the 5th- and 4th-order weights.
-const E1: f64 = 71.0 / 57600.0;
-const E3: f64 = -71.0 / 16695.0;
-const E4: f64 = 71.0 / 1920.0;
-const E5: f64 = -17253.0 / 339200.0;
-const E6: f64 = 22.0 / 525.0;
-const E7: f64 = -1.0 / 40.0;
+pub(crate) const E1: f64 = 71.0 / 57600.0;
+pub(crate) const E3: f64 = -71.0 / 16695.0;
+pub(crate) const E4: f64 = 71.0 / 1920.0;
+pub(crate) const E5: f64 = -17253.0 / 339200.0;
+pub(crate) const E6: f64 = 22.0 / 525.0;
+pub(crate) const E7: f64 = -1.0 / 40.0;
 
 impl Stepper {
     pub(crate) fn new(method: Method, max_length: f64) -> Self {
@@ -467,23 +468,49 @@ impl Stepper {
         else {
             return true;
         };
-        let err = (err2 / 6.0).sqrt() / *tolerance;
-        let err = if err.is_finite() { err } else { 1e10 };
-        if err <= 1.0 {
-            let factor = if err == 0.0 {
-                *grow_max
-            } else {
-                // err^(-1/5), once a step.
-                (0.9 * err.powf(-0.2)).clamp(0.2, *grow_max)
-            };
-            *h = (hs * factor).min(*h_max);
-            *grow_max = 5.0;
-            true
-        } else {
-            *h = hs * (0.9 * err.powf(-0.2)).clamp(0.1, 0.9);
-            // No growth right after a rejection (Hairer's advice).
-            *grow_max = 1.0;
-            false
-        }
+        let (accept, next, grow) = control_step::<false>(hs, err2, *tolerance, *h_max, *grow_max);
+        *h = next;
+        *grow_max = grow;
+        accept
+    }
+}
+
+/// The step-size control of [`Stepper::control`] as a pure, branch-free
+/// function, so that the lanes kernels run the same arithmetic in their lane
+/// loops: after a Dormand–Prince step of `hs` whose error estimate has the
+/// squared norm `err2` (six components), with the stepper's `tolerance`,
+/// longest step `h_max` and growth limit `grow_max`, returns whether the step
+/// is accepted, the next step and the next growth limit.
+///
+/// Accepted (RMS error ≤ tolerance): `0.9·err^(−1/5)·h`, between 0.2 h and
+/// `grow_max`·h (an error of exactly 0 gives the full growth), at most
+/// `h_max`; the growth limit goes back to 5. Rejected: the same factor
+/// between 0.1 and 0.9, and no growth on the next step (Hairer's advice).
+/// A non-finite error counts as 10¹⁰ (rejected, shrunk tenfold).
+#[inline(always)]
+pub(crate) fn control_step<const FMA: bool>(
+    hs: f64,
+    err2: f64,
+    tolerance: f64,
+    h_max: f64,
+    grow_max: f64,
+) -> (bool, f64, f64) {
+    let err = (err2 / 6.0).sqrt() / tolerance;
+    let err = if err.abs() < f64::INFINITY { err } else { 1e10 };
+    // err^(−1/5), once a step; err = 0 is clamped to 1e-300 inside, whose
+    // factor (≈ 1e60) clamps to the growth limit, as an exact 0 should.
+    let factor = 0.9 * pow_neg_fifth::<FMA>(err);
+    let accept = err <= 1.0;
+    let up = if factor < 0.2 { 0.2 } else { factor };
+    let up = if up > grow_max { grow_max } else { up };
+    let grown = hs * up;
+    let grown = if grown > h_max { h_max } else { grown };
+    let down = if factor < 0.1 { 0.1 } else { factor };
+    let down = if down > 0.9 { 0.9 } else { down };
+    let shrunk = hs * down;
+    if accept {
+        (true, grown, 5.0)
+    } else {
+        (false, shrunk, 1.0)
     }
 }
