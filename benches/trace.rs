@@ -3,9 +3,13 @@
 //! CPU runs), through four media: background only, background + inversion,
 //! and the full medium with one and with eight hot spots. Criterion's
 //! throughput is RK4 steps per second (`Throughput::Elements(steps)`); a table
-//! of rays/s and steps/s per path follows at the end. Then the cost of one
-//! exact Jacobian of `problems/desert-lake.json` relative to one residual
-//! evaluation, on one thread.
+//! of rays/s and steps/s per path follows at the end. Then Dormand–Prince
+//! (adaptive steps, each lane its own) through the logistic model and real
+//! air, scalar against lanes, in right-hand-side evaluations per second: the
+//! Wigner lab's 1000-ray fan over warm water (Gladstone–Dale, tolerance
+//! 1e-6), Ciddor air with hydrostatic pressure, and hot spots. Then the cost
+//! of one exact Jacobian of `problems/desert-lake.json` relative to one
+//! residual evaluation, on one thread.
 //!
 //! Run with `cargo bench --bench trace`; a filter such as
 //! `cargo bench --bench trace -- "hot spot/"` runs a subset (the table is
@@ -14,11 +18,13 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use mirage::fit::objective::Objective;
 use mirage::math::V3;
-use mirage::medium::{Background, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium};
+use mirage::medium::{
+    Background, Field, HotSpot, IndexField, Inversion, LogisticField, LogisticMedium, Medium,
+};
 use mirage::pair::PointPair;
 use mirage::problem::Problem;
 use mirage::trace::batch::{
-    BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_2d, trace_batch_3d,
+    BatchOptions, Isa, LANES, RayJob, trace_batch, trace_batch_2d, trace_batch_3d, trace_batch_into,
 };
 use mirage::trace::{End, Method, TargetPlane, Trace, TraceOptions, trace};
 use std::hint::black_box;
@@ -117,7 +123,7 @@ type Path_ = (String, Box<dyn Fn(&LogisticField, &[RayJob], &mut [Trace])>);
 
 /// Every path that applies to `field`.
 fn paths(field: &LogisticField) -> Vec<Path_> {
-    let batch = BatchOptions::from_trace_options(&options()).unwrap();
+    let batch = BatchOptions::from_trace_options(&options());
     let mut out: Vec<Path_> = vec![("scalar".to_string(), Box::new(scalar))];
     for isa in Isa::available() {
         out.push((
@@ -169,6 +175,114 @@ fn bench_trace(c: &mut Criterion) {
         let mut out = vec![placeholder(); jobs.len()];
         for (path, run) in paths(&field) {
             group.bench_function(BenchmarkId::from_parameter(&path), |b| {
+                b.iter(|| run(black_box(&field), black_box(&jobs), &mut out))
+            });
+        }
+        group.finish();
+    }
+}
+
+/// Dormand–Prince cases: (name, field, rays, tolerance).
+fn adaptive_cases() -> Vec<(String, Field, Vec<RayJob>, f64)> {
+    let air = |text: &str| -> Field {
+        serde_json::from_str::<Medium>(text)
+            .expect("a valid medium")
+            .field()
+    };
+    let wigner = air(
+        r#"{"air": {"temperature": {"base": 10.033, "exponential": {"delta": 3.15, "scale_height": 0.04975124378109452}},
+                     "pressure": 101325.0, "hydrostatic": false, "refractivity": {"gladstone_dale": 0.079386}}}"#,
+    );
+    let ciddor = air(r#"{"air": {"temperature": {"base": 10.0, "lapse": -0.0065,
+              "exponential": {"delta": 3.0, "scale_height": 0.3},
+              "inversion": {"delta": 6.0, "height": 12.0, "thickness": 1.5}}, "humidity": 0.6}}"#);
+    let road = air(
+        r#"{"air": {"temperature": {"base": 30.0, "lapse": -0.0065}, "humidity": 0.3,
+                     "refractivity": {"gladstone_dale": 0.0787}},
+            "hotspots": [{"x": 0.0, "z": 1000.0, "radius": 400.0, "edge": 0.05, "delta": 30.0, "scale_height": 0.35}]}"#,
+    );
+    let media = media();
+    vec![
+        (
+            "fan: real air, Gladstone–Dale".to_string(),
+            wigner,
+            fan(),
+            1e-6,
+        ),
+        (
+            "logistic inversion".to_string(),
+            Field::Logistic(media[1].1.field()),
+            jobs(),
+            1e-9,
+        ),
+        (
+            "logistic hot spot".to_string(),
+            Field::Logistic(media[2].1.field()),
+            jobs(),
+            1e-9,
+        ),
+        ("real air, Ciddor".to_string(), ciddor, jobs(), 1e-9),
+        ("real air, hot spot".to_string(), road, jobs(), 1e-9),
+    ]
+}
+
+/// The Wigner lab's fan: 1000 rays from 1.1 m, −0.04° … −0.14°, to 3 km.
+fn fan() -> Vec<RayJob> {
+    (0..1000)
+        .map(|k| {
+            let angle = (-0.04 - 0.1 * k as f64 / 999.0).to_radians();
+            RayJob {
+                origin: V3::new(0.0, 1.1, 0.0),
+                direction: V3::new(0.0, angle.sin(), angle.cos()),
+                target: TargetPlane {
+                    point: V3::new(0.0, 0.0, 3000.0),
+                    normal: V3::new(0.0, 0.0, 1.0),
+                },
+            }
+        })
+        .collect()
+}
+
+/// Scalar and lanes (the batch entry, on this CPU's widest build) for one
+/// Dormand–Prince case.
+fn adaptive_paths(tolerance: f64) -> Vec<Path2> {
+    let options = TraceOptions::new(Method::Dopri5 { tolerance });
+    let batch = BatchOptions::from_trace_options(&options);
+    vec![
+        (
+            "scalar".to_string(),
+            Box::new(move |f: &Field, jobs: &[RayJob], out: &mut [Trace]| {
+                for (j, o) in jobs.iter().zip(out) {
+                    *o = trace::<f64, _>(f, j.origin, j.direction, Some(&j.target), &options, None);
+                }
+            }),
+        ),
+        (
+            format!("lanes-{}", Isa::detect().name()),
+            Box::new(move |f: &Field, jobs: &[RayJob], out: &mut [Trace]| {
+                trace_batch_into(f, jobs, &batch, out)
+            }),
+        ),
+    ]
+}
+
+/// A named way to trace a batch through any field.
+type Path2 = (String, Box<dyn Fn(&Field, &[RayJob], &mut [Trace])>);
+
+fn bench_adaptive(c: &mut Criterion) {
+    for (name, field, jobs, tolerance) in adaptive_cases() {
+        let mut out = vec![placeholder(); jobs.len()];
+        let paths = adaptive_paths(tolerance);
+        (paths[0].1)(&field, &jobs, &mut out);
+        let rhs: u64 = out.iter().map(|t| t.stats.rhs_evaluations).sum();
+        let mut group = c.benchmark_group(format!("dopri5 {name}"));
+        group
+            .throughput(Throughput::Elements(rhs))
+            .sample_size(20)
+            .warm_up_time(Duration::from_millis(500))
+            .measurement_time(Duration::from_secs(3));
+        for (path, run) in &paths {
+            group.bench_function(BenchmarkId::from_parameter(path), |b| {
                 b.iter(|| run(black_box(&field), black_box(&jobs), &mut out))
             });
         }
@@ -291,6 +405,27 @@ fn table() {
             );
         }
     }
+    println!(
+        "\nDormand–Prince, one core (best CPU time of this thread): rays/s and M right-hand sides/s"
+    );
+    println!(
+        "{:<32} {:>6} {:<14} {:>12} {:>10} {:>10}",
+        "case", "rays", "path", "rays/s", "M RHS/s", "RHS/ray"
+    );
+    for (name, field, jobs, tolerance) in adaptive_cases() {
+        let mut out = vec![placeholder(); jobs.len()];
+        for (path, run) in adaptive_paths(tolerance) {
+            let t = best_time(|| run(&field, &jobs, &mut out));
+            let rhs: u64 = out.iter().map(|t| t.stats.rhs_evaluations).sum();
+            println!(
+                "{name:<32} {:>6} {path:<14} {:>12.0} {:>10.2} {:>10.1}",
+                jobs.len(),
+                jobs.len() as f64 / t,
+                rhs as f64 / t / 1e6,
+                rhs as f64 / jobs.len() as f64
+            );
+        }
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -318,7 +453,7 @@ fn table() {
     let field = objective.medium(&x).field();
     let pairs = objective.pairs();
     let batch_jobs: Vec<RayJob> = pairs.iter().map(PointPair::ray_job).collect();
-    let batch = BatchOptions::from_trace_options(objective.options()).unwrap();
+    let batch = BatchOptions::from_trace_options(objective.options());
     // Wall time for both: the objective traces on the pool's thread.
     let lanes = best_wall_time(|| {
         let traces = trace_batch(&field, &batch_jobs, &batch);
@@ -349,6 +484,7 @@ fn cpu_features() -> String {
 fn main() {
     let mut c = Criterion::default().configure_from_args();
     bench_trace(&mut c);
+    bench_adaptive(&mut c);
     bench_objective(&mut c);
     c.final_summary();
     // Not in `cargo test --benches` (which passes --test) or when listing.

@@ -4,7 +4,8 @@
 
 use crate::medium::{IndexField, Medium, PairFields};
 use crate::problem::{Problem, TraceSpec};
-use crate::trace::{End, RayState, Stats};
+use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
+use crate::trace::{End, RayState, Stats, Trace};
 use serde::Serialize;
 
 /// One pair's traced outcome.
@@ -65,16 +66,18 @@ pub struct TraceReport {
 /// Traces every pair of `problem` through `medium` and reports endpoints,
 /// distances, flags and totals. A pair with its own `wavelength` is traced
 /// through `medium` at that wavelength (one compiled field per distinct
-/// wavelength, [`PairFields`]). Pairs are traced in parallel; the result does
-/// not depend on the number of threads.
+/// wavelength, [`PairFields`]). Pairs go through the batch entry
+/// ([`trace_batch_into`]: the SIMD lanes for the logistic kind and real air)
+/// in fixed chunks traced in parallel; the result does not depend on the
+/// number of threads.
 pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
-    use rayon::prelude::*;
     let fields = pair_fields(problem, medium);
+    let traces = trace_all(problem, &fields);
     let pairs: Vec<PairReport> = problem
         .pairs
-        .par_iter()
-        .enumerate()
-        .map(|(i, pair)| pair_report(pair, fields.of(i), &problem.trace, None))
+        .iter()
+        .zip(&traces)
+        .map(|(pair, t)| report_of(pair, t))
         .collect();
     let mut totals = Totals::default();
     let mut stats = Stats::default();
@@ -94,20 +97,37 @@ pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
     }
 }
 
-/// The fields `problem`'s pairs are traced through at `medium`: one per
-/// distinct pair wavelength.
-pub fn pair_fields(problem: &Problem, medium: &Medium) -> PairFields {
-    PairFields::new(medium, problem.pairs.iter().map(|p| p.wavelength))
+/// Rays of one lane width per parallel task: the split is fixed, so threads
+/// change who traces a chunk, not what it computes.
+const CHUNK: usize = 16;
+
+/// Every pair's trace through its field, `result[i]` for `problem.pairs[i]`.
+fn trace_all(problem: &Problem, fields: &PairFields) -> Vec<Trace> {
+    use rayon::prelude::*;
+    let batch = BatchOptions::from_trace_options(&problem.trace);
+    let mut out = vec![Trace::default(); problem.pairs.len()];
+    for (g, field) in fields.fields().iter().enumerate() {
+        let members: Vec<usize> = (0..problem.pairs.len())
+            .filter(|&i| fields.groups()[i] == g)
+            .collect();
+        let jobs: Vec<RayJob> = members
+            .iter()
+            .map(|&i| problem.pairs[i].ray_job())
+            .collect();
+        let mut part = vec![Trace::default(); members.len()];
+        jobs.par_chunks(CHUNK)
+            .zip(part.par_chunks_mut(CHUNK))
+            .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
+        for (i, t) in members.into_iter().zip(part) {
+            out[i] = t;
+        }
+    }
+    out
 }
 
-/// Traces one pair (optionally recording its path).
-pub fn pair_report<F: IndexField + ?Sized>(
-    pair: &crate::pair::PointPair,
-    field: &F,
-    options: &crate::trace::TraceOptions,
-    path: Option<&mut Vec<RayState>>,
-) -> PairReport {
-    let (t, r) = pair.evaluate::<f64, _>(field, options, path);
+/// A pair's report from its trace.
+fn report_of(pair: &crate::pair::PointPair, t: &Trace) -> PairReport {
+    let r = (t.endpoint - pair.target()) * pair.weight;
     PairReport {
         endpoint: t.endpoint.to_array(),
         target: pair.target,
@@ -120,4 +140,21 @@ pub fn pair_report<F: IndexField + ?Sized>(
         arc_length: t.arc_length,
         stats: t.stats,
     }
+}
+
+/// The fields `problem`'s pairs are traced through at `medium`: one per
+/// distinct pair wavelength.
+pub fn pair_fields(problem: &Problem, medium: &Medium) -> PairFields {
+    PairFields::new(medium, problem.pairs.iter().map(|p| p.wavelength))
+}
+
+/// Traces one pair (optionally recording its path) by the scalar tracer.
+pub fn pair_report<F: IndexField + ?Sized>(
+    pair: &crate::pair::PointPair,
+    field: &F,
+    options: &crate::trace::TraceOptions,
+    path: Option<&mut Vec<RayState>>,
+) -> PairReport {
+    let (t, _) = pair.evaluate::<f64, _>(field, options, path);
+    report_of(pair, &t)
 }

@@ -125,7 +125,7 @@ fn the_batch_entry_traces_the_kind_as_the_scalar_tracer_does() {
         let jobs = jobs();
         for step in [7.3, 0.5] {
             let options = TraceOptions::new(Method::Rk4 { step });
-            let batch = BatchOptions::from_trace_options(&options).unwrap();
+            let batch = BatchOptions::from_trace_options(&options);
             let traces = trace_batch(&field, &jobs, &batch);
             assert_eq!(traces.len(), jobs.len());
             for (job, t) in jobs.iter().zip(&traces) {
@@ -183,7 +183,7 @@ fn the_batch_entry_keeps_ground_mode_max_length_and_step_limit() {
         base,
     ];
     for options in variants {
-        let batch = BatchOptions::from_trace_options(&options).unwrap();
+        let batch = BatchOptions::from_trace_options(&options);
         let t = &trace_batch(&field, &[down], &batch)[0];
         let s = trace::<f64, _>(
             &field,
@@ -201,7 +201,7 @@ fn the_batch_entry_keeps_ground_mode_max_length_and_step_limit() {
     }
     // Each option does what it says.
     let run = |options: TraceOptions| {
-        let batch = BatchOptions::from_trace_options(&options).unwrap();
+        let batch = BatchOptions::from_trace_options(&options);
         trace_batch(&field, &[down], &batch).remove(0)
     };
     let stop = run(variants[0]);

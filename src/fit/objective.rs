@@ -134,44 +134,32 @@ impl Objective {
         PairFields::new(medium, self.pairs.iter().map(|p| p.wavelength))
     }
 
-    /// Residuals and flags at `x`. Pairs are traced in parallel; with RK4 they
-    /// go through the batch entry (for the logistic kind the SIMD lanes kernel:
-    /// same steps and endpoints as the scalar tracer to ~1e-12 m). The result
-    /// is identical for any number of threads.
+    /// Residuals and flags at `x`. Pairs are traced in parallel through the
+    /// batch entry (for the logistic kind and real air the SIMD lanes
+    /// kernels: the scalar tracer's steps and endpoints to ~1e-12 m). The
+    /// result is identical for any number of threads.
     pub fn residuals(&self, x: &[f64]) -> (DVector<f64>, Vec<PairFlags>) {
         self.residual_evaluations.fetch_add(1, Ordering::Relaxed);
         let fields = self.fields(&self.medium(x));
-        let traces: Vec<Trace> = match BatchOptions::from_trace_options(&self.options) {
-            // RK4 goes through the batch entry, which takes the lanes kernel
-            // for the logistic kind and the general tracer for the others.
-            Some(batch) => {
-                let mut out = vec![Trace::default(); self.pairs.len()];
-                // One batch per wavelength (a single one, of every pair in
-                // order, without per-pair wavelengths).
-                for (g, field) in fields.fields().iter().enumerate() {
-                    let members: Vec<usize> = (0..self.pairs.len())
-                        .filter(|&i| fields.groups()[i] == g)
-                        .collect();
-                    let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
-                    let mut part = vec![Trace::default(); members.len()];
-                    // Chunks of one lane width; the split is fixed, so threads
-                    // only change who computes a chunk, not what it computes.
-                    jobs.par_chunks(LANE_CHUNK)
-                        .zip(part.par_chunks_mut(LANE_CHUNK))
-                        .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
-                    for (i, t) in members.into_iter().zip(part) {
-                        out[i] = t;
-                    }
-                }
-                out
+        let batch = BatchOptions::from_trace_options(&self.options);
+        let mut traces = vec![Trace::default(); self.pairs.len()];
+        // One batch per wavelength (a single one, of every pair in order,
+        // without per-pair wavelengths).
+        for (g, field) in fields.fields().iter().enumerate() {
+            let members: Vec<usize> = (0..self.pairs.len())
+                .filter(|&i| fields.groups()[i] == g)
+                .collect();
+            let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
+            let mut part = vec![Trace::default(); members.len()];
+            // Chunks of one lane width; the split is fixed, so threads only
+            // change who computes a chunk, not what it computes.
+            jobs.par_chunks(LANE_CHUNK)
+                .zip(part.par_chunks_mut(LANE_CHUNK))
+                .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
+            for (i, t) in members.into_iter().zip(part) {
+                traces[i] = t;
             }
-            None => self
-                .pairs
-                .par_iter()
-                .enumerate()
-                .map(|(i, pair)| pair.evaluate::<f64, _>(fields.of(i), &self.options, None).0)
-                .collect(),
-        };
+        }
         let mut r = DVector::zeros(self.len());
         let mut flags = Vec::with_capacity(self.pairs.len());
         for (i, (t, pair)) in traces.iter().zip(&self.pairs).enumerate() {

@@ -247,11 +247,14 @@ impl<T: Real> AirField<T> {
     }
 }
 
-impl<T: Real> IndexField<T> for AirField<T> {
+impl<T: Real> AirField<T> {
+    /// δ and ∇δ from the temperature `t` (K) with its gradient and the
+    /// pressure with its height derivative: the temperature held inside
+    /// [−150 °C, 300 °C], then the formula and the chain rule. The last stage
+    /// of [`IndexField::delta_gradient`], apart so that the lanes kernels
+    /// (`trace::batch`) call it per lane where they have no vector form.
     #[inline]
-    fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
-        let (t, grad_t) = self.kelvin(p);
-        let (pressure, dp_dh) = self.pressure(p.y);
+    pub(crate) fn index_from(&self, t: T, grad_t: V3<T>, pressure: T, dp_dh: T) -> (T, V3<T>) {
         // Past the ceiling the tracers stop; hold the floor so δ stays finite.
         let floor = COLDEST + KELVIN;
         let hottest = HOTTEST + KELVIN;
@@ -266,14 +269,20 @@ impl<T: Real> IndexField<T> for AirField<T> {
         } else {
             (t, grad_t)
         };
-        let state = AirState {
-            celsius: t - KELVIN,
-            pressure,
-            humidity: self.humidity,
-            wavelength_nm: self.wavelength,
-            co2_ppm: self.co2,
-        };
-        let (delta, d_dt, d_dp) = match self.formula {
+        let (delta, d_dt, d_dp) = self.partials(t, pressure);
+        let grad = V3::new(
+            d_dt * grad_t.x,
+            d_dt * grad_t.y + d_dp * dp_dh,
+            d_dt * grad_t.z,
+        );
+        (delta, grad)
+    }
+
+    /// (δ, ∂δ/∂T, ∂δ/∂P) of the formula at temperature `t` (K, inside the
+    /// held range) and `pressure`.
+    #[inline]
+    pub(crate) fn partials(&self, t: T, pressure: T) -> (T, T, T) {
+        match self.formula {
             // δ = K·(P/P₀)/T: its partials in closed form (the tracer's hot
             // path for the many mirage papers that use this law).
             Formula::GladstoneDale(k) => {
@@ -282,14 +291,37 @@ impl<T: Real> IndexField<T> for AirField<T> {
                 let d = d_dp * pressure;
                 (d, -(d * inv_t), d_dp)
             }
-            formula => refractivity_partials(formula, &state),
-        };
-        let grad = V3::new(
-            d_dt * grad_t.x,
-            d_dt * grad_t.y + d_dp * dp_dh,
-            d_dt * grad_t.z,
-        );
-        (delta, grad)
+            formula => {
+                let state = AirState {
+                    celsius: t - KELVIN,
+                    pressure,
+                    humidity: self.humidity,
+                    wavelength_nm: self.wavelength,
+                    co2_ppm: self.co2,
+                };
+                refractivity_partials(formula, &state)
+            }
+        }
+    }
+
+    /// The pressure (Pa) and its height derivative at h, where the uniform
+    /// temperature is `kelvin_u` (K): [`AirField::pressure`] without
+    /// evaluating the profile again.
+    #[inline]
+    pub(crate) fn pressure_with(&self, h: T, kelvin_u: T) -> (T, T) {
+        match &self.pressure {
+            Pressure::Constant(p) => (*p, T::cst(0.0)),
+            Pressure::Hydrostatic(table) => table.eval(h, kelvin_u),
+        }
+    }
+}
+
+impl<T: Real> IndexField<T> for AirField<T> {
+    #[inline]
+    fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
+        let (t, grad_t) = self.kelvin(p);
+        let (pressure, dp_dh) = self.pressure(p.y);
+        self.index_from(t, grad_t, pressure, dp_dh)
     }
 
     fn is_stratified(&self) -> bool {
@@ -319,6 +351,74 @@ impl<T: Real> IndexField<T> for AirField<T> {
             cap = cap.min(limit);
         }
         cap
+    }
+}
+
+/// The analytic part of the uniform profile, as the lanes kernels evaluate
+/// it: base (K), lapse, surface layer (δT, 1/H), step aloft (δT, height,
+/// 1/thickness).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct UniformTerms {
+    pub kelvin0: f64,
+    pub lapse: Option<Lapse<f64>>,
+    pub exponential: Option<(f64, f64)>,
+    pub inversion: Option<(f64, f64, f64)>,
+}
+
+/// Real air as plain numbers for the lanes kernels (`trace::batch::air`):
+/// what has a vector form there, and `None` where the kernels call the
+/// scalar stage per lane instead.
+#[derive(Clone, Debug)]
+pub(crate) struct LaneTerms {
+    /// The analytic uniform profile; `None` for a table.
+    pub uniform: Option<UniformTerms>,
+    /// Hot spots `[x, z, radius, edge, δT, 1/H]`.
+    pub hotspots: Vec<[f64; 6]>,
+    /// The pressure when it is constant; `None` when hydrostatic.
+    pub constant_pressure: Option<f64>,
+    /// K of the Gladstone–Dale law; `None` for Ciddor and Edlén.
+    pub gladstone_dale: Option<f64>,
+    /// The thin layers' zones `(lo, hi, scale)` of [`AirField::step_limit`].
+    pub zones: Vec<(f64, f64, f64)>,
+    /// How many scales of height a step may cover inside a zone.
+    pub zone_step_scales: f64,
+}
+
+impl AirField<f64> {
+    /// This air as the lanes kernels evaluate it.
+    pub(crate) fn lane_terms(&self) -> LaneTerms {
+        let uniform = match &self.profile {
+            Profile::Terms {
+                kelvin0,
+                lapse,
+                exponential,
+                inversion,
+            } => Some(UniformTerms {
+                kelvin0: *kelvin0,
+                lapse: *lapse,
+                exponential: *exponential,
+                inversion: *inversion,
+            }),
+            Profile::Table(_) => None,
+        };
+        LaneTerms {
+            uniform,
+            hotspots: self
+                .hotspots
+                .iter()
+                .map(|h| [h.x, h.z, h.radius, h.edge, h.delta, h.inv_scale])
+                .collect(),
+            constant_pressure: match &self.pressure {
+                Pressure::Constant(p) => Some(*p),
+                Pressure::Hydrostatic(_) => None,
+            },
+            gladstone_dale: match self.formula {
+                Formula::GladstoneDale(k) => Some(k),
+                _ => None,
+            },
+            zones: self.zones.clone(),
+            zone_step_scales: ZONE_STEP_SCALES,
+        }
     }
 }
 

@@ -52,6 +52,7 @@ pub mod standard;
 
 pub use checks::WAVELENGTH_RANGE;
 pub use field::{AirField, COLDEST, HOTTEST, KELVIN};
+pub(crate) use field::{LaneTerms, UniformTerms};
 pub use model::{
     Air, AirHotSpot, AirMedium, DEFAULT_BASE, DEFAULT_CO2, DEFAULT_PRESSURE, DEFAULT_WAVELENGTH,
     Exponential, Lapse, Step, Temperature,

@@ -1,11 +1,14 @@
-//! The batch loop: lanes take jobs in order, step together, and the rays whose
+//! The batch loop: lanes take jobs in order, step together (each lane
+//! accepting or rejecting its own adaptive step), and the rays whose accepted
 //! step may hold an event are resolved one by one by the scalar tracer's code
 //! ([`decide_step`]); a lane whose ray is done takes the next job, and when
 //! none is left it is frozen (step 0). Nothing is allocated per step.
 
+use super::field::LaneField;
 use super::job::{BatchOptions, RayJob};
+use super::lanes::Attempts;
 use crate::math::V3;
-use crate::medium::{IndexField, LogisticField};
+use crate::medium::IndexField;
 use crate::trace::event::{StepEnd, decide_step, locate};
 use crate::trace::{End, RayRate, RayState, Segment, Stats, Trace, state};
 
@@ -23,24 +26,31 @@ pub(crate) fn placeholder() -> Trace {
 }
 
 /// A lane kernel: the state of `N` rays (at most [`LANES`](super::LANES)) and
-/// one RK4 step over all of them. The driver ([`drive`]) owns the jobs and the
-/// event logic.
+/// one step over all of them (RK4, or a Dormand–Prince attempt per lane). The
+/// driver ([`drive`]) owns the jobs and the event logic.
 pub(crate) trait Kernel<const N: usize> {
+    /// The medium it steps through.
+    type Field: LaneField;
+    /// That medium (its scalar form starts the rays).
+    fn field(&self) -> &Self::Field;
     /// Puts a ray into `lane`: its start state and rate (evaluated by the
-    /// scalar field, exactly as the scalar tracer starts), step and limits.
+    /// scalar field, exactly as the scalar tracer starts) and its limits; its
+    /// step control starts as the scalar stepper's.
     fn load(
         &mut self,
         lane: usize,
         job: &RayJob,
         start: &RayState,
         rate: &RayRate,
-        step: f64,
         max_length: f64,
     );
     /// Stops `lane` from moving (its step becomes 0).
     fn freeze(&mut self, lane: usize);
-    /// One RK4 step of every lane; the previous state stays readable.
-    fn step<const FMA: bool>(&mut self);
+    /// Right-hand-side evaluations per attempted step.
+    fn stages(&self) -> u64;
+    /// One step (or attempt) of every lane; the previous state stays
+    /// readable, and a lane whose attempt was not accepted keeps its state.
+    fn step<const FMA: bool>(&mut self) -> Attempts;
     /// After a step: updates each lane's nearest point to its plane and returns
     /// the lanes whose step may hold an event (plane crossing, ground, maximum
     /// length), as a bit mask. May report more lanes, never fewer.
@@ -55,8 +65,12 @@ pub(crate) trait Kernel<const N: usize> {
 #[derive(Clone, Copy)]
 struct Slot {
     job: usize,
-    /// Global step count when the ray was loaded.
+    /// Global step count when the ray was loaded: every live lane attempts a
+    /// step each round, so `global − start` is the ray's attempts.
     start: u64,
+    /// Accepted and rejected attempts.
+    accepted: u64,
+    rejected: u64,
     occluded: bool,
     max_length: f64,
 }
@@ -66,7 +80,6 @@ struct Slot {
 #[inline(always)]
 pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
     kernel: &mut K,
-    field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
     out: &mut [Trace],
@@ -74,21 +87,35 @@ pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
     let mut slots = [Slot {
         job: 0,
         start: 0,
+        accepted: 0,
+        rejected: 0,
         occluded: false,
         max_length: 0.0,
     }; N];
+    let stages = kernel.stages();
     let mut next = 0;
     let mut live = 0u64;
     let mut global = 0u64;
     for lane in 0..N {
         refill(
-            kernel, lane, field, jobs, options, out, &mut next, &mut slots, &mut live, global,
+            kernel, lane, jobs, options, out, &mut next, &mut slots, &mut live, global,
         );
     }
     while live != 0 {
-        kernel.step::<FMA>();
+        let attempts = kernel.step::<FMA>();
         global += 1;
-        let mut events = kernel.scan() & live;
+        let accepted = attempts.accepted & live;
+        let underflow = attempts.underflow & live;
+        for (lane, slot) in slots.iter_mut().enumerate() {
+            if live >> lane & 1 == 1 {
+                if accepted >> lane & 1 == 1 {
+                    slot.accepted += 1;
+                } else if underflow >> lane & 1 == 0 {
+                    slot.rejected += 1;
+                }
+            }
+        }
+        let mut events = (kernel.scan() & accepted) | underflow;
         // Every live ray started at or after slot.start, so only a ray loaded
         // max_steps ago can hit the limit now.
         if let Some(first) = global.checked_sub(options.max_steps) {
@@ -102,14 +129,31 @@ pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
             let lane = events.trailing_zeros() as usize;
             events &= events - 1;
             let slot = &mut slots[lane];
-            let steps = global - slot.start;
+            let attempts = global - slot.start;
             let job = &jobs[slot.job];
-            let seg = kernel.segment(lane);
-            if let Some(t) = after_step(&seg, job, slot, options, steps, || kernel.nearest(lane)) {
+            let done = if accepted >> lane & 1 == 1 {
+                let seg = kernel.segment(lane);
+                let ceiling = kernel.field().ceiling();
+                after_step(&seg, job, slot, options, attempts, ceiling, stages, || {
+                    kernel.nearest(lane)
+                })
+            } else {
+                // The step underflowed (the scalar tracer gives up there), or
+                // a rejected attempt was the last one allowed.
+                let best = kernel.nearest(lane);
+                Some(finished(
+                    best.x,
+                    best.v,
+                    best.s,
+                    End::StepLimit,
+                    slot,
+                    stages,
+                ))
+            };
+            if let Some(t) = done {
                 out[slot.job] = t;
                 refill(
-                    kernel, lane, field, jobs, options, out, &mut next, &mut slots, &mut live,
-                    global,
+                    kernel, lane, jobs, options, out, &mut next, &mut slots, &mut live, global,
                 );
             }
         }
@@ -122,7 +166,6 @@ pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
 fn refill<K: Kernel<N>, const N: usize>(
     kernel: &mut K,
     lane: usize,
-    field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
     out: &mut [Trace],
@@ -136,6 +179,7 @@ fn refill<K: Kernel<N>, const N: usize>(
         *next += 1;
         let job = &jobs[j];
         // The start state exactly as the scalar tracer computes it.
+        let field = kernel.field();
         let (delta0, _) = field.delta_gradient(job.origin);
         let y = RayState {
             x: job.origin,
@@ -147,18 +191,20 @@ fn refill<K: Kernel<N>, const N: usize>(
         let max_length = options
             .max_length
             .unwrap_or(4.0 * (job.target.point - job.origin).norm());
-        let occluded = job.origin.y < 0.0;
-        if options.max_steps == 0 {
-            out[j] = finished(y.x, y.v, y.s, End::StepLimit, occluded, 0);
-            continue;
-        }
-        kernel.load(lane, job, &y, &f, options.step, max_length);
-        slots[lane] = Slot {
+        let slot = Slot {
             job: j,
             start: global,
-            occluded,
+            accepted: 0,
+            rejected: 0,
+            occluded: job.origin.y < 0.0,
             max_length,
         };
+        if options.max_steps == 0 {
+            out[j] = finished(y.x, y.v, y.s, End::StepLimit, &slot, kernel.stages());
+            continue;
+        }
+        kernel.load(lane, job, &y, &f, max_length);
+        slots[lane] = slot;
         *live |= 1 << lane;
         return;
     }
@@ -166,52 +212,60 @@ fn refill<K: Kernel<N>, const N: usize>(
     *live &= !(1 << lane);
 }
 
-/// The scalar tracer's logic after one accepted step (the events of
-/// [`decide_step`], then the step limit, as `trace` checks them): the
+/// The scalar tracer's logic after one accepted step (the ceiling, the events
+/// of [`decide_step`], then the step limit, as `trace` checks them): the
 /// finished trace if the ray ends in this step.
+#[allow(clippy::too_many_arguments)]
 fn after_step(
     seg: &Segment<f64>,
     job: &RayJob,
     slot: &mut Slot,
     options: &BatchOptions,
-    steps: u64,
+    attempts: u64,
+    ceiling: f64,
+    stages: u64,
     nearest: impl FnOnce() -> RayState,
 ) -> Option<Trace> {
+    if seg.y1.x.y > ceiling {
+        let y1 = &seg.y1;
+        return Some(finished(y1.x, y1.v, y1.s, End::LeftAir, slot, stages));
+    }
     let t = &job.target;
     let events = decide_step(seg, Some(t), options.ground, slot.max_length);
     slot.occluded |= events.occluded;
     let end = match events.end {
         Some(StepEnd::Plane(theta)) => {
             let (e, st) = locate(seg, seg, theta, t.normal, t.point);
-            return Some(finished(e, st.v, st.s, End::Plane, slot.occluded, steps));
+            return Some(finished(e, st.v, st.s, End::Plane, slot, stages));
         }
         Some(StepEnd::Ground(theta)) => {
             let (e, st) = locate(seg, seg, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
-            return Some(finished(e, st.v, st.s, End::Ground, slot.occluded, steps));
+            return Some(finished(e, st.v, st.s, End::Ground, slot, stages));
         }
         Some(StepEnd::MaxLength) => End::MaxLength,
-        None if steps >= options.max_steps => End::StepLimit,
+        None if attempts >= options.max_steps => End::StepLimit,
         None => return None,
     };
     let best = nearest();
-    Some(finished(best.x, best.v, best.s, end, slot.occluded, steps))
+    Some(finished(best.x, best.v, best.s, end, slot, stages))
 }
 
 /// A finished trace (a target plane is always given, so any other end than the
-/// plane makes the ray unreachable).
-fn finished(endpoint: V3, v: V3, s: f64, end: End, occluded: bool, steps: u64) -> Trace {
+/// plane makes the ray unreachable), with the slot's statistics.
+fn finished(endpoint: V3, v: V3, s: f64, end: End, slot: &Slot, stages: u64) -> Trace {
     Trace {
         endpoint,
         direction: v.normalized(),
         arc_length: s,
         end,
-        occluded,
+        occluded: slot.occluded,
         unreachable: end != End::Plane,
         stats: Stats {
-            // The start rate, then four new evaluations per RK4 step.
-            rhs_evaluations: 1 + 4 * steps,
-            accepted_steps: steps,
-            rejected_steps: 0,
+            // The start rate, then the new evaluations of every attempt
+            // that ran its stages (an underflowed one ran none).
+            rhs_evaluations: 1 + stages * (slot.accepted + slot.rejected),
+            accepted_steps: slot.accepted,
+            rejected_steps: slot.rejected,
         },
     }
 }

@@ -5,7 +5,6 @@
 
 use super::driver::{Kernel, drive};
 use super::job::{BatchOptions, RayJob};
-use crate::medium::LogisticField;
 use crate::trace::Trace;
 use crate::trace::fastexp::exp_core;
 
@@ -119,7 +118,6 @@ pub fn exp_in_place(isa: Isa, xs: &mut [f64]) {
 pub(crate) fn run<K: Kernel<N>, const N: usize>(
     isa: Isa,
     kernel: &mut K,
-    field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
     out: &mut [Trace],
@@ -129,11 +127,11 @@ pub(crate) fn run<K: Kernel<N>, const N: usize>(
     match isa {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked above).
-        Isa::Avx512 => unsafe { drive_avx512(kernel, field, jobs, options, out) },
+        Isa::Avx512 => unsafe { drive_avx512(kernel, jobs, options, out) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the CPU has AVX2 and FMA (checked above).
-        Isa::Avx2 => unsafe { drive_avx2(kernel, field, jobs, options, out) },
-        _ => drive::<K, N, false>(kernel, field, jobs, options, out),
+        Isa::Avx2 => unsafe { drive_avx2(kernel, jobs, options, out) },
+        _ => drive::<K, N, false>(kernel, jobs, options, out),
     }
 }
 
@@ -145,12 +143,11 @@ pub(crate) fn run<K: Kernel<N>, const N: usize>(
 #[target_feature(enable = "avx512f,avx2,fma")]
 unsafe fn drive_avx512<K: Kernel<N>, const N: usize>(
     kernel: &mut K,
-    field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
     out: &mut [Trace],
 ) {
-    drive::<K, N, true>(kernel, field, jobs, options, out)
+    drive::<K, N, true>(kernel, jobs, options, out)
 }
 
 /// [`drive`] compiled for AVX2 with FMA.
@@ -161,10 +158,9 @@ unsafe fn drive_avx512<K: Kernel<N>, const N: usize>(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn drive_avx2<K: Kernel<N>, const N: usize>(
     kernel: &mut K,
-    field: &LogisticField,
     jobs: &[RayJob],
     options: &BatchOptions,
     out: &mut [Trace],
 ) {
-    drive::<K, N, true>(kernel, field, jobs, options, out)
+    drive::<K, N, true>(kernel, jobs, options, out)
 }

@@ -15,11 +15,12 @@ pub struct RayJob {
     pub target: TargetPlane,
 }
 
-/// Settings of a batch: [`TraceOptions`] restricted to fixed-step RK4.
+/// Settings of a batch: the [`TraceOptions`] of every ray in it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BatchOptions {
-    /// RK4 step in τ (metres).
-    pub step: f64,
+    /// Integrator and its accuracy (RK4's step or Dormand–Prince's
+    /// tolerance), as the scalar tracer takes it.
+    pub method: Method,
     /// Largest arc length; `None`: 4 × each ray's distance to its target.
     pub max_length: Option<f64>,
     /// Behaviour at the ground.
@@ -29,18 +30,23 @@ pub struct BatchOptions {
 }
 
 impl BatchOptions {
-    /// The batch equivalent of `options`, or `None` when its method is not
-    /// [`Method::Rk4`] (the adaptive method has no batch kernel: its step
-    /// sequence differs per ray).
-    pub fn from_trace_options(options: &TraceOptions) -> Option<Self> {
-        match options.method {
-            Method::Rk4 { step } => Some(BatchOptions {
-                step,
-                max_length: options.max_length,
-                ground: options.ground,
-                max_steps: options.max_steps,
-            }),
-            Method::Dopri5 { .. } => None,
+    /// The batch equivalent of `options`: the same rays, traced the same way.
+    pub fn from_trace_options(options: &TraceOptions) -> Self {
+        BatchOptions {
+            method: options.method,
+            max_length: options.max_length,
+            ground: options.ground,
+            max_steps: options.max_steps,
+        }
+    }
+
+    /// The scalar tracer's options for the same rays.
+    pub fn trace_options(&self) -> TraceOptions {
+        TraceOptions {
+            method: self.method,
+            max_length: self.max_length,
+            ground: self.ground,
+            max_steps: self.max_steps,
         }
     }
 }

@@ -1,19 +1,27 @@
-//! The 3-D lane kernel: RK4 over the full field, hot spots included, one
-//! branch-free loop over the lanes per right-hand-side term.
+//! The 3-D lane kernel: RK4 or Dormand–Prince 5(4) (each lane with its own
+//! adaptive step, see `adaptive`) over the full field, hot spots included,
+//! one branch-free loop over the lanes per right-hand-side term.
 
 // Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
+use super::adaptive::{advance, error_term, judge, keep, prepare};
+use super::air::AirLanes;
 use super::driver::Kernel;
+use super::field::{LaneField, LogisticLanes};
 use super::isa::{Isa, run};
 use super::job::{BatchOptions, RayJob};
-use super::lanes::{LANES, LaneBuf, LaneSet, combine};
-use super::terms::Coefficients;
+use super::lanes::{Attempts, Control, LANES, LaneBuf, LaneSet, combine};
+use super::stratified::stages_per_attempt;
 use crate::math::V3;
 use crate::medium::LogisticField;
+use crate::medium::air::AirField;
 use crate::trace::fastexp::fmadd;
-use crate::trace::{RayRate, RayState, Segment, Trace};
+use crate::trace::stepper::{
+    A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65, B1, B3, B4, B5, B6,
+};
+use crate::trace::{Method, RayRate, RayState, Segment, Trace};
 
 /// Traces every job with the 3-D lanes kernel built for `isa` (any field).
 ///
@@ -26,20 +34,49 @@ pub fn trace_batch_3d(
     options: &BatchOptions,
     out: &mut [Trace],
 ) {
-    let c = Coefficients::of(field);
+    trace_3d(isa, &LogisticLanes::new(field), jobs, options, out);
+}
+
+/// [`trace_batch_3d`] for real air.
+///
+/// # Panics
+/// If `out.len() != jobs.len()`, or if this CPU cannot run `isa`.
+pub fn trace_air_3d(
+    isa: Isa,
+    field: &AirField,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) {
+    trace_3d(isa, &AirLanes::new(field), jobs, options, out);
+}
+
+/// The 3-D kernel over any lane field.
+fn trace_3d<F: LaneField>(
+    isa: Isa,
+    field: &F,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) {
     // A small batch (a fit with few pairs, split over threads) would leave
     // half of the lanes idle, yet computed: take the half-width kernel.
     if jobs.len() <= LANES / 2 {
         run(
             isa,
-            &mut Lanes3::<{ LANES / 2 }>::new(c),
-            field,
+            &mut Lanes3::<F, { LANES / 2 }>::new(field, options.method),
             jobs,
             options,
             out,
         );
     } else {
-        run(isa, &mut Lanes3::<LANES>::new(c), field, jobs, options, out);
+        run(
+            isa,
+            &mut Lanes3::<F, LANES>::new(field, options.method),
+            jobs,
+            options,
+            out,
+        );
     }
 }
 
@@ -93,14 +130,10 @@ impl<const N: usize> Buf3<N> {
     }
 
     /// Sets the rate from the field at the buffer's positions (n = 1 + δ,
-    /// a = ∇δ·n, as `state::rate`), accumulating δ and ∇δ in place.
+    /// a = ∇δ·n, as `state::rate`), computing δ and ∇δ in place.
     #[inline(always)]
-    fn set_rate<const FMA: bool>(&mut self, c: &Coefficients) {
-        self.n = [0.0; N];
-        self.ax = [0.0; N];
-        self.ay = [0.0; N];
-        self.az = [0.0; N];
-        c.delta_gradient::<N, FMA>(
+    fn set_rate<F: LaneField, const FMA: bool>(&mut self, c: &F) {
+        c.full::<N, FMA>(
             [&self.x, &self.y, &self.z],
             &mut self.n,
             [&mut self.ax, &mut self.ay, &mut self.az],
@@ -111,6 +144,26 @@ impl<const N: usize> Buf3<N> {
             self.ax[i] *= n;
             self.ay[i] *= n;
             self.az[i] *= n;
+        }
+    }
+
+    /// Copies the lanes of `mask` from `from`.
+    #[inline(always)]
+    fn keep(&mut self, mask: u64, from: &Self) {
+        for (to, from) in [
+            (&mut self.x, &from.x),
+            (&mut self.y, &from.y),
+            (&mut self.z, &from.z),
+            (&mut self.vx, &from.vx),
+            (&mut self.vy, &from.vy),
+            (&mut self.vz, &from.vz),
+            (&mut self.s, &from.s),
+            (&mut self.ax, &from.ax),
+            (&mut self.ay, &from.ay),
+            (&mut self.az, &from.az),
+            (&mut self.n, &from.n),
+        ] {
+            keep(mask, from, to);
         }
     }
 }
@@ -145,42 +198,60 @@ impl<const N: usize> LaneBuf<N, 7> for Buf3<N> {
 
 /// The 3-D lane kernel: the full field, hot spots included; the nearest
 /// point keeps (x, y, z, v_x, v_y, v_z, s).
-struct Lanes3<const N: usize> {
-    c: Coefficients,
+struct Lanes3<'a, F, const N: usize> {
+    field: &'a F,
     set: LaneSet<Buf3<N>, N, 7>,
 }
 
-impl<const N: usize> Lanes3<N> {
-    fn new(c: Coefficients) -> Self {
+impl<'a, F: LaneField, const N: usize> Lanes3<'a, F, N> {
+    fn new(field: &'a F, method: Method) -> Self {
         Lanes3 {
-            c,
-            set: LaneSet::new(Buf3::ZERO),
+            field,
+            set: LaneSet::new(Buf3::ZERO, method, field.ceiling()),
         }
     }
 }
 
-impl<const N: usize> Kernel<N> for Lanes3<N> {
+impl<F: LaneField, const N: usize> Kernel<N> for Lanes3<'_, F, N> {
+    type Field = F;
+
+    fn field(&self) -> &F {
+        self.field
+    }
+
     fn load(
         &mut self,
         lane: usize,
         job: &RayJob,
         start: &RayState,
         rate: &RayRate,
-        step: f64,
         max_length: f64,
     ) {
-        self.set.load(lane, job, start, rate, step, max_length);
+        self.set.load(lane, job, start, rate, max_length);
     }
 
     fn freeze(&mut self, lane: usize) {
         self.set.freeze(lane);
     }
 
+    fn stages(&self) -> u64 {
+        stages_per_attempt(self.set.method())
+    }
+
     #[inline(always)]
-    fn step<const FMA: bool>(&mut self) {
-        let (h, y0, stages, y1) = self.set.step_parts();
-        rk4_3d::<N, FMA>(&self.c, h, y0, stages, y1);
+    fn step<const FMA: bool>(&mut self) -> Attempts {
+        let method = self.set.method();
+        let (control, y0, stages, y1) = self.set.step_parts();
+        let attempts = match method {
+            Method::Rk4 { .. } => {
+                let [k2, k3, k4, _, _] = stages;
+                rk4_3d::<F, N, FMA>(self.field, &control.h, y0, [k2, k3, k4], y1);
+                Attempts::all::<N>()
+            }
+            Method::Dopri5 { .. } => dopri5_3d::<F, N, FMA>(self.field, control, y0, stages, y1),
+        };
         self.set.flip();
+        attempts
     }
 
     #[inline(always)]
@@ -209,11 +280,11 @@ impl<const N: usize> Kernel<N> for Lanes3<N> {
 /// two elements of one array, and kept the final sum scalar; see
 /// [`LaneSet::step_parts`]).
 #[inline(always)]
-fn rk4_3d<const N: usize, const FMA: bool>(
-    c: &Coefficients,
+fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
+    c: &F,
     h: &[f64; N],
     y0: &Buf3<N>,
-    [k2, k3, k4]: &mut [Buf3<N>; 3],
+    [k2, k3, k4]: [&mut Buf3<N>; 3],
     y1: &mut Buf3<N>,
 ) {
     // Stage states of the scalar `rk4_step` (y + c·h·k), each with its rate.
@@ -227,7 +298,7 @@ fn rk4_3d<const N: usize, const FMA: bool>(
         k2.vy[i] = fmadd::<FMA>(y0.ay[i], f, y0.vy[i]);
         k2.vz[i] = fmadd::<FMA>(y0.az[i], f, y0.vz[i]);
     }
-    k2.set_rate::<FMA>(c);
+    k2.set_rate::<F, FMA>(c);
     // k3 at y + h/2·k2.
     for i in 0..N {
         let f = 0.5 * h[i];
@@ -238,7 +309,7 @@ fn rk4_3d<const N: usize, const FMA: bool>(
         k3.vy[i] = fmadd::<FMA>(k2.ay[i], f, y0.vy[i]);
         k3.vz[i] = fmadd::<FMA>(k2.az[i], f, y0.vz[i]);
     }
-    k3.set_rate::<FMA>(c);
+    k3.set_rate::<F, FMA>(c);
     // k4 at y + h·k3.
     for i in 0..N {
         let f = h[i];
@@ -249,7 +320,7 @@ fn rk4_3d<const N: usize, const FMA: bool>(
         k4.vy[i] = fmadd::<FMA>(k3.ay[i], f, y0.vy[i]);
         k4.vz[i] = fmadd::<FMA>(k3.az[i], f, y0.vz[i]);
     }
-    k4.set_rate::<FMA>(c);
+    k4.set_rate::<F, FMA>(c);
     for i in 0..N {
         let h6 = (1.0 / 6.0) * h[i];
         let h3 = (1.0 / 3.0) * h[i];
@@ -262,5 +333,72 @@ fn rk4_3d<const N: usize, const FMA: bool>(
         y1.vz[i] = combine::<FMA>(y0.vz[i], [y0.az[i], k2.az[i], k3.az[i], k4.az[i]], b);
         y1.s[i] = combine::<FMA>(y0.s[i], [y0.n[i], k2.n[i], k3.n[i], k4.n[i]], b);
     }
-    y1.set_rate::<FMA>(c);
+    y1.set_rate::<F, FMA>(c);
+}
+
+/// One Dormand–Prince attempt of every lane from `y0` into `y1`: the scalar
+/// `Stepper::attempt`'s stages, error estimate and controller, lane-wise (see
+/// `adaptive`). Rejected and underflowed lanes end where they started.
+#[inline(always)]
+fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
+    f: &F,
+    control: &mut Control<N>,
+    y0: &Buf3<N>,
+    [k2, k3, k4, k5, k6]: &mut [Buf3<N>; 5],
+    y1: &mut Buf3<N>,
+) -> Attempts {
+    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], &y0.vy);
+    let h = control.used;
+    // A stage state y0 + h·Σ a_j k_j, component by component: position
+    // from the stages' v, v from their a.
+    macro_rules! stage {
+        ($out:ident, $len:literal, $c:expr, [$($k:ident),+]) => {{
+            let c: [f64; $len] = $c;
+            advance::<N, $len, FMA>(&y0.x, &h, c, [$(&$k.vx),+], &mut $out.x);
+            advance::<N, $len, FMA>(&y0.y, &h, c, [$(&$k.vy),+], &mut $out.y);
+            advance::<N, $len, FMA>(&y0.z, &h, c, [$(&$k.vz),+], &mut $out.z);
+            advance::<N, $len, FMA>(&y0.vx, &h, c, [$(&$k.ax),+], &mut $out.vx);
+            advance::<N, $len, FMA>(&y0.vy, &h, c, [$(&$k.ay),+], &mut $out.vy);
+            advance::<N, $len, FMA>(&y0.vz, &h, c, [$(&$k.az),+], &mut $out.vz);
+        }};
+    }
+    stage!(k2, 1, [A21], [y0]);
+    k2.set_rate::<F, FMA>(f);
+    stage!(k3, 2, [A31, A32], [y0, k2]);
+    k3.set_rate::<F, FMA>(f);
+    stage!(k4, 3, [A41, A42, A43], [y0, k2, k3]);
+    k4.set_rate::<F, FMA>(f);
+    stage!(k5, 4, [A51, A52, A53, A54], [y0, k2, k3, k4]);
+    k5.set_rate::<F, FMA>(f);
+    stage!(k6, 5, [A61, A62, A63, A64, A65], [y0, k2, k3, k4, k5]);
+    k6.set_rate::<F, FMA>(f);
+    stage!(y1, 5, [B1, B3, B4, B5, B6], [y0, k3, k4, k5, k6]);
+    advance::<N, 5, FMA>(
+        &y0.s,
+        &h,
+        [B1, B3, B4, B5, B6],
+        [&y0.n, &k3.n, &k4.n, &k5.n, &k6.n],
+        &mut y1.s,
+    );
+    y1.set_rate::<F, FMA>(f);
+    // The error estimate: position from the stages' v, v from their a.
+    let mut e = [[0.0; N]; 6];
+    let [ex, ey, ez, evx, evy, evz] = &mut e;
+    error_term([&y0.vx, &k3.vx, &k4.vx, &k5.vx, &k6.vx, &y1.vx], &h, ex);
+    error_term([&y0.vy, &k3.vy, &k4.vy, &k5.vy, &k6.vy, &y1.vy], &h, ey);
+    error_term([&y0.vz, &k3.vz, &k4.vz, &k5.vz, &k6.vz, &y1.vz], &h, ez);
+    error_term([&y0.ax, &k3.ax, &k4.ax, &k5.ax, &k6.ax, &y1.ax], &h, evx);
+    error_term([&y0.ay, &k3.ay, &k4.ay, &k5.ay, &k6.ay, &y1.ay], &h, evy);
+    error_term([&y0.az, &k3.az, &k4.az, &k5.az, &k6.az, &y1.az], &h, evz);
+    let mut err2 = [0.0; N];
+    for i in 0..N {
+        err2[i] = (ex[i] * ex[i] + ey[i] * ey[i] + ez[i] * ez[i])
+            + (evx[i] * evx[i] + evy[i] * evy[i] + evz[i] * evz[i]);
+    }
+    let accepted = judge::<N, FMA>(control, &err2) & !underflow;
+    y1.keep(!accepted, y0);
+    Attempts {
+        accepted,
+        underflow,
+    }
 }

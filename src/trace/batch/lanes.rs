@@ -1,7 +1,9 @@
 //! What the 3-D and 2-D lane kernels share: the lane count, the double buffer
-//! of lane states with its RK4 stages, the per-lane target plane and limits,
-//! the nearest-point tracking and the vector event screen. A kernel supplies
-//! its state buffer ([`LaneBuf`]) and its RK4 step; everything else is here.
+//! of lane states with the stages of a step, each lane's step control
+//! ([`Control`]: RK4's fixed step, or Dormand–Prince's adaptive one), target
+//! plane and limits, the nearest-point tracking and the vector event screen.
+//! A kernel supplies its state buffer ([`LaneBuf`]) and its steps;
+//! everything else is here.
 
 // Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
 // arrays is the form the compiler vectorizes.
@@ -9,7 +11,7 @@
 
 use super::job::RayJob;
 use crate::trace::fastexp::fmadd;
-use crate::trace::{RayRate, RayState, Segment};
+use crate::trace::{Method, RayRate, RayState, Segment};
 
 /// Rays traced side by side: two AVX-512 (four AVX2) registers per
 /// operation. Measured faster than 8 (too few independent chains to hide the
@@ -46,21 +48,59 @@ pub(crate) trait LaneBuf<const N: usize, const M: usize>: Copy {
     fn screened(&self) -> [&[f64; N]; 5];
 }
 
+/// Each lane's step control. RK4: `h` is the fixed step. Dormand–Prince: the
+/// state of the scalar `Stepper::Dopri5`, lane by lane: the next step `h`,
+/// the longest `h_max` and the growth limit `grow`; `used` is the step the
+/// last attempt took (the accepted step's length, for its segment).
+#[derive(Clone, Copy)]
+pub(crate) struct Control<const N: usize> {
+    pub h: [f64; N],
+    pub used: [f64; N],
+    pub h_max: [f64; N],
+    pub grow: [f64; N],
+    /// Dormand–Prince's local error bound (0 for RK4).
+    pub tolerance: f64,
+}
+
+/// What one step of every lane did, as lane masks.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Attempts {
+    /// The lanes whose step was taken (RK4: every lane).
+    pub accepted: u64,
+    /// The lanes whose adaptive step had shrunk below what f64 resolves
+    /// (nothing moved; the scalar tracer gives up there).
+    pub underflow: u64,
+}
+
+impl Attempts {
+    /// Every one of `N` lanes accepted (a fixed step).
+    pub(crate) fn all<const N: usize>() -> Self {
+        Attempts {
+            accepted: if N == 64 { u64::MAX } else { (1u64 << N) - 1 },
+            underflow: 0,
+        }
+    }
+}
+
 /// The lane state of a kernel over buffers `B`: the current and previous
-/// states, the stages of a step, and each lane's step, plane, limit and
-/// nearest point so far.
+/// states, the stages of a step, and each lane's step control, plane, limit
+/// and nearest point so far.
 pub(crate) struct LaneSet<B, const N: usize, const M: usize> {
     buf: [B; 2],
-    /// The stages k2, k3, k4 of a step (kept here, not re-initialised on the
-    /// stack every step).
-    stages: [B; 3],
+    /// The stages of a step: k2, k3, k4 for RK4, k2 … k6 for Dormand–Prince
+    /// (kept here, not re-initialised on the stack every step).
+    stages: [B; 5],
     /// Index of the buffer with the current state; the other holds the
     /// previous one (the start of the last step).
     cur: usize,
-    h: [f64; N],
+    control: Control<N>,
+    method: Method,
     /// Target plane: point and normal.
     plane: [[f64; N]; 6],
     max_length: [f64; N],
+    /// The medium's ceiling (`IndexField::ceiling`): a ray that rises past it
+    /// has left the air.
+    ceiling: f64,
     /// Distance to the plane of the nearest point so far, and that point's
     /// tracked components.
     near_d: [f64; N],
@@ -69,27 +109,38 @@ pub(crate) struct LaneSet<B, const N: usize, const M: usize> {
 
 impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     /// Every lane idle, its buffers `zero` (a state harmless to step).
-    pub(crate) fn new(zero: B) -> Self {
+    pub(crate) fn new(zero: B, method: Method, ceiling: f64) -> Self {
         LaneSet {
             buf: [zero; 2],
-            stages: [zero; 3],
+            stages: [zero; 5],
             cur: 0,
-            h: [0.0; N],
+            control: Control {
+                h: [0.0; N],
+                used: [0.0; N],
+                h_max: [0.0; N],
+                grow: [5.0; N],
+                tolerance: match method {
+                    Method::Rk4 { .. } => 0.0,
+                    Method::Dopri5 { tolerance } => tolerance,
+                },
+            },
+            method,
             plane: [[0.0; N]; 6],
             max_length: [f64::INFINITY; N],
+            ceiling,
             near_d: [f64::INFINITY; N],
             near: [[0.0; N]; M],
         }
     }
 
-    /// Puts a ray into `lane` (see `Kernel::load`).
+    /// Puts a ray into `lane` (see `Kernel::load`), its step control set as
+    /// `Stepper::new` sets it.
     pub(crate) fn load(
         &mut self,
         lane: usize,
         job: &RayJob,
         start: &RayState,
         rate: &RayRate,
-        step: f64,
         max_length: f64,
     ) {
         let b = &mut self.buf[self.cur];
@@ -97,7 +148,25 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
         for (near, v) in self.near.iter_mut().zip(b.tracked()) {
             near[lane] = v[lane];
         }
-        self.h[lane] = step;
+        let c = &mut self.control;
+        match self.method {
+            Method::Rk4 { step } => {
+                c.h[lane] = step;
+                c.used[lane] = step;
+            }
+            Method::Dopri5 { .. } => {
+                // No step longer than a quarter of the path (`Stepper::new`).
+                let h_max = if max_length.is_finite() {
+                    0.25 * max_length
+                } else {
+                    1e3
+                };
+                c.h[lane] = h_max.min(0.2 * h_max.max(1.0));
+                c.used[lane] = 0.0;
+                c.h_max[lane] = h_max;
+                c.grow[lane] = 5.0;
+            }
+        }
         let t = &job.target;
         let plane = [
             t.point.x, t.point.y, t.point.z, t.normal.x, t.normal.y, t.normal.z,
@@ -112,27 +181,35 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     /// Stops `lane` from moving (its step becomes 0, and it never reaches
     /// its maximum length).
     pub(crate) fn freeze(&mut self, lane: usize) {
-        self.h[lane] = 0.0;
+        let c = &mut self.control;
+        c.h[lane] = 0.0;
+        c.used[lane] = 0.0;
+        c.h_max[lane] = 0.0;
         self.max_length[lane] = f64::INFINITY;
     }
 
-    /// The parts of a step of every lane: the steps h, the current state
-    /// `y0`, the stages and the buffer `y1` for the new state; [`Self::flip`]
-    /// then makes `y1` current and `y0` the previous state. They are distinct
-    /// references, so that the compiler knows they do not overlap and
-    /// vectorizes each lane loop (through `self` it could not tell `y0` from
-    /// `y1`, two elements of one array). Not a closure: a closure is compiled
-    /// without the caller's target features, and its fused multiply–adds
-    /// would become calls to the software `fma`.
+    /// How rays are stepped.
+    pub(crate) fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The parts of a step of every lane: the step control, the current
+    /// state `y0`, the stages and the buffer `y1` for the new state;
+    /// [`Self::flip`] then makes `y1` current and `y0` the previous state.
+    /// They are distinct references, so that the compiler knows they do not
+    /// overlap and vectorizes each lane loop (through `self` it could not tell
+    /// `y0` from `y1`, two elements of one array). Not a closure: a closure is
+    /// compiled without the caller's target features, and its fused
+    /// multiply–adds would become calls to the software `fma`.
     #[inline(always)]
-    pub(crate) fn step_parts(&mut self) -> (&[f64; N], &B, &mut [B; 3], &mut B) {
+    pub(crate) fn step_parts(&mut self) -> (&mut Control<N>, &B, &mut [B; 5], &mut B) {
         let (first, second) = self.buf.split_at_mut(1);
         let (y0, y1) = if self.cur == 0 {
             (&first[0], &mut second[0])
         } else {
             (&second[0], &mut first[0])
         };
-        (&self.h, y0, &mut self.stages, y1)
+        (&mut self.control, y0, &mut self.stages, y1)
     }
 
     /// After a step written by [`Self::step_parts`]: the new state becomes
@@ -153,6 +230,7 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
             y1.tracked(),
             &self.plane,
             &self.max_length,
+            self.ceiling,
             &mut self.near_d,
             &mut self.near,
         )
@@ -172,7 +250,7 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
             f0,
             y1,
             f1,
-            h: self.h[lane],
+            h: self.control.used[lane],
         }
     }
 
@@ -186,14 +264,16 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
 /// why):
 /// updates the nearest points from `now` and returns the lanes whose step
 /// from `y0` to `y1` (each x, y, z, v_y, s) may cross the plane, go below
-/// the ground, or reach the maximum length.
+/// the ground, reach the maximum length or rise past the ceiling.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn scan<const N: usize, const M: usize>(
     y0: [&[f64; N]; 5],
     y1: [&[f64; N]; 5],
     now: [&[f64; N]; M],
     plane: &[[f64; N]; 6],
     max_length: &[f64; N],
+    ceiling: f64,
     near_d: &mut [f64; N],
     near: &mut [[f64; N]; M],
 ) -> u64 {
@@ -213,7 +293,8 @@ fn scan<const N: usize, const M: usize>(
         let crossed = g >= -CROSSING_MARGIN;
         let ground = (y0y[i] >= 0.0) & ((y[i] < 0.0) | ((y0vy[i] < 0.0) & (vy[i] > 0.0)));
         let long = s[i] >= max_length[i];
-        mask |= u64::from(crossed | ground | long) << i;
+        let high = y[i] > ceiling;
+        mask |= u64::from(crossed | ground | long | high) << i;
     }
     mask
 }

@@ -1,21 +1,27 @@
-//! Many rays at once: fixed-step RK4 through a [`LogisticField`] over
-//! [`LANES`] rays held in structure-of-arrays lanes, with the instruction set
-//! picked at run time. [`trace_batch`] takes a [`Field`] of any kind and sends
-//! the kinds the lanes do not evaluate to the scalar tracer, job by job.
+//! Many rays at once: RK4 or Dormand–Prince 5(4) through the logistic model
+//! or real air over [`LANES`] rays held in structure-of-arrays lanes, with
+//! the instruction set picked at run time. [`trace_batch`] takes a [`Field`]
+//! of any kind and sends the kind the lanes do not evaluate (the analytic
+//! test medium) to the scalar tracer, job by job.
 //!
 //! # Semantics
 //!
-//! Each ray is traced exactly as [`crate::trace::trace`] traces it with
-//! [`Method::Rk4`] and a target plane: the same τ-form state, the same step
-//! sequence, the endpoint where the quintic Hermite interpolant of the crossing
-//! step meets the plane, `occluded` (also for dips below the ground between two
-//! step ends), `unreachable` with the traced point nearest the plane, the
-//! maximum length (default 4 × the distance to the target), the step limit,
-//! [`GroundMode`](crate::trace::GroundMode), and the same [`Stats`](crate::trace::Stats). The only numerical difference is
-//! the exponential: a polynomial ([`fastexp`](crate::trace::fastexp), within 1 ulp of
-//! `f64::exp`) instead of libm's, and fused multiply–adds where the CPU has
+//! Each ray is traced exactly as [`crate::trace::trace`] traces it with the
+//! same [`Method`](crate::trace::Method) and a target plane: the same τ-form state, the same step
+//! sequence (Dormand–Prince: each lane with its own adaptive step, the scalar
+//! stepper's controller and the medium's step limits), the endpoint where the
+//! quintic Hermite interpolant of the crossing step meets the plane,
+//! `occluded` (also for dips below the ground between two step ends),
+//! `unreachable` with the traced point nearest the plane, the maximum length
+//! (default 4 × the distance to the target), the step limit, real air's
+//! ceiling, [`GroundMode`](crate::trace::GroundMode), and the same
+//! [`Stats`](crate::trace::Stats). The only numerical difference is the
+//! exponential: a polynomial ([`fastexp`](crate::trace::fastexp), within 1 ulp
+//! of `f64::exp`) instead of libm's, and fused multiply–adds where the CPU has
 //! them; endpoints agree with the scalar tracer to about 10⁻¹¹ m
-//! (`tests/fast_paths.rs` checks 10⁻⁹ m).
+//! (`tests/fast_paths.rs` checks 10⁻⁹ m; an adaptive step whose error
+//! estimate lies within rounding of the tolerance may be decided the other
+//! way, which moves that ray's endpoint by about the tolerance).
 //!
 //! # How it is fast
 //!
@@ -53,8 +59,7 @@
 //!     weight: 1.0,
 //!     wavelength: None,
 //! };
-//! let options = BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 }))
-//!     .expect("an RK4 method");
+//! let options = BatchOptions::from_trace_options(&TraceOptions::new(Method::Rk4 { step: 1.0 }));
 //! let traces = trace_batch(&medium.field(), &[pair.ray_job()], &options);
 //! assert!(!traces[0].unreachable);
 //! ```
@@ -62,12 +67,17 @@
 //! # Layout
 //!
 //! `job` (what a batch traces), `lanes` (the lane state both kernels share,
-//! and the event screen), `terms` (the medium's terms lane-wise), `kernel`
-//! (the 3-D RK4 kernel), [`stratified`] (the 2-D one), `driver` (job
+//! each lane's step control, and the event screen), `adaptive` (Dormand–Prince's
+//! step control over lanes), `field` (the medium lane-wise: the trait and the
+//! logistic kind), `terms` (the logistic model's terms), `air` (real air),
+//! `kernel` (the 3-D kernel), [`stratified`] (the 2-D one), `driver` (job
 //! scheduling, lane refill, freezing, events) and `isa` (instruction sets and
 //! the run-time dispatch).
 
+mod adaptive;
+mod air;
 mod driver;
+mod field;
 mod isa;
 mod job;
 mod kernel;
@@ -77,19 +87,19 @@ mod terms;
 
 pub use isa::{Isa, exp_in_place};
 pub use job::{BatchOptions, RayJob};
-pub use kernel::trace_batch_3d;
+pub use kernel::{trace_air_3d, trace_batch_3d};
 pub use lanes::LANES;
-pub use stratified::{NotStratified, trace_batch_2d};
+pub use stratified::{NotStratified, trace_air_2d, trace_batch_2d};
 
-use crate::medium::{Field, LogisticField};
-use crate::trace::{Method, Trace, TraceOptions, trace};
+use crate::medium::Field;
+use crate::trace::{Trace, trace};
 
 /// Traces every job by the fastest path for this field and CPU: for the
-/// logistic kind, the 2-D [`stratified`] kernel when the field has no hot
-/// spots and the 3-D lanes kernel otherwise; any other kind (the lanes
-/// evaluate the logistic formula only) through the general scalar tracer
-/// [`crate::trace::trace`], job by job, with the same options, so the
-/// results mean the same. `result[i]` is the trace of `jobs[i]`.
+/// logistic kind and real air, the 2-D [`stratified`] kernel when the field
+/// has no hot spots and the 3-D lanes kernel otherwise; the analytic test
+/// medium (no lane form) through the general scalar tracer
+/// [`crate::trace::trace`], job by job, with the same options, so the results
+/// mean the same. `result[i]` is the trace of `jobs[i]`.
 pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Vec<Trace> {
     let mut out = vec![driver::placeholder(); jobs.len()];
     trace_batch_into(field, jobs, options, &mut out);
@@ -102,34 +112,26 @@ pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Ve
 /// # Panics
 /// If `out.len() != jobs.len()`.
 pub fn trace_batch_into(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
-    match field {
-        Field::Logistic(field) => trace_logistic(field, jobs, options, out),
-        Field::LinearSquare(_) | Field::Air(_) => trace_scalar(field, jobs, options, out),
-    }
-}
-
-/// The lanes kernels: 2-D when the field is stratified, else 3-D.
-fn trace_logistic(
-    field: &LogisticField,
-    jobs: &[RayJob],
-    options: &BatchOptions,
-    out: &mut [Trace],
-) {
     let isa = Isa::detect();
-    if trace_batch_2d(isa, field, jobs, options, out).is_err() {
-        trace_batch_3d(isa, field, jobs, options, out);
+    match field {
+        Field::Logistic(field) => {
+            if trace_batch_2d(isa, field, jobs, options, out).is_err() {
+                trace_batch_3d(isa, field, jobs, options, out);
+            }
+        }
+        Field::Air(field) => {
+            if trace_air_2d(isa, field, jobs, options, out).is_err() {
+                trace_air_3d(isa, field, jobs, options, out);
+            }
+        }
+        Field::LinearSquare(_) => trace_scalar(field, jobs, options, out),
     }
 }
 
 /// The general tracer, one job after the other, with the batch's options.
 fn trace_scalar(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
     assert_eq!(out.len(), jobs.len(), "one output slot per job");
-    let options = TraceOptions {
-        method: Method::Rk4 { step: options.step },
-        max_length: options.max_length,
-        ground: options.ground,
-        max_steps: options.max_steps,
-    };
+    let options = options.trace_options();
     for (job, out) in jobs.iter().zip(out) {
         *out = trace::<f64, _>(
             field,

@@ -4,14 +4,17 @@
 //!
 //! In the τ form the horizontal part of `dv/dτ = n∇δ` is exactly 0, so v_x and
 //! v_z are constants (Snell's invariant n·t, per horizontal axis) and only the
-//! vertical pair (y, v_y) and the arc length are integrated by RK4 with the
-//! rate of δ(y): one term loop per layer per stage, no hot spots, no
-//! horizontal gradient, no v_x, v_z updates. The horizontal position is
-//! advanced by the constant v_x, v_z with RK4's own weights, the operations
-//! the 3-D RK4 performs on it (its horizontal rate is exactly 0 here), so the
-//! horizontal rounding, which over thousands of steps drifts by up to 10⁻¹³
-//! of the distance, is the 3-D path's too, and the endpoints agree with the
-//! 3-D paths to the rounding of the exponential.
+//! vertical pair (y, v_y) and the arc length are integrated, by RK4 or
+//! Dormand–Prince 5(4) with each lane's own adaptive step (see `adaptive`),
+//! with the rate of δ(y): one term loop per layer per stage, no hot spots,
+//! no horizontal gradient, no v_x, v_z updates. These are the scalar planar
+//! stepper's operations (`Stepper::attempt_planar`), lane-wise. The
+//! horizontal position is advanced by the constant v_x, v_z with the
+//! method's own weights, the operations the 3-D step performs on it (its
+//! horizontal rate is exactly 0 here), so the horizontal rounding, which over
+//! thousands of steps drifts by up to 10⁻¹³ of the distance, is the 3-D
+//! path's too, and the endpoints agree with the 3-D paths to the rounding of
+//! the exponential.
 //!
 //! The state maps back to 3-D as `v = (v_x, v_y, v_z)`, `dv/dτ = (0, a_y, 0)`.
 //! Events are the 3-D ones, evaluated on the mapped step by the same scalar
@@ -21,20 +24,27 @@
 //!
 //! Call it through [`trace_batch`](super::trace_batch), which
 //! takes this path whenever the field allows it, or directly with
-//! [`trace_batch_2d`].
+//! [`trace_batch_2d`] (the logistic kind) and `trace_air_2d` (real air).
 
 // Lane loops index several arrays in lockstep (see `lanes.rs`).
 #![allow(clippy::needless_range_loop)]
 
+use super::adaptive::{advance, constant_error_term, error_term, judge, keep, prepare};
+use super::air::AirLanes;
 use super::driver::Kernel;
+use super::field::{LaneField, LogisticLanes};
 use super::isa::{Isa, run};
 use super::job::{BatchOptions, RayJob};
-use super::lanes::{LANES, LaneBuf, LaneSet, combine};
-use super::terms::Coefficients;
+use super::lanes::{Attempts, Control, LANES, LaneBuf, LaneSet, combine};
 use crate::math::V3;
-use crate::medium::{IndexField, LogisticField};
+use crate::medium::LogisticField;
+use crate::medium::air::AirField;
 use crate::trace::fastexp::fmadd;
-use crate::trace::{RayRate, RayState, Segment, Trace};
+use crate::trace::stepper::{
+    A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65, B1, B3, B4, B5, B6,
+    DOPRI5_WEIGHTS,
+};
+use crate::trace::{Method, RayRate, RayState, Segment, Trace};
 
 /// The field has hot spots, so δ depends on x and z too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
@@ -53,22 +63,51 @@ pub fn trace_batch_2d(
     options: &BatchOptions,
     out: &mut [Trace],
 ) -> Result<(), NotStratified> {
+    trace_2d(isa, &LogisticLanes::new(field), jobs, options, out)
+}
+
+/// [`trace_batch_2d`] for real air.
+///
+/// # Panics
+/// If `out.len() != jobs.len()`, or if this CPU cannot run `isa`.
+pub fn trace_air_2d(
+    isa: Isa,
+    field: &AirField,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) -> Result<(), NotStratified> {
+    trace_2d(isa, &AirLanes::new(field), jobs, options, out)
+}
+
+/// The 2-D kernel over any lane field.
+fn trace_2d<F: LaneField>(
+    isa: Isa,
+    field: &F,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) -> Result<(), NotStratified> {
     if !field.is_stratified() {
         return Err(NotStratified);
     }
-    let c = Coefficients::of(field);
     // Half-width lanes for small batches, as in `trace_batch_3d`.
     if jobs.len() <= LANES / 2 {
         run(
             isa,
-            &mut Lanes2::<{ LANES / 2 }>::new(c),
-            field,
+            &mut Lanes2::<F, { LANES / 2 }>::new(field, options.method),
             jobs,
             options,
             out,
         );
     } else {
-        run(isa, &mut Lanes2::<LANES>::new(c), field, jobs, options, out);
+        run(
+            isa,
+            &mut Lanes2::<F, LANES>::new(field, options.method),
+            jobs,
+            options,
+            out,
+        );
     }
     Ok(())
 }
@@ -99,15 +138,25 @@ impl<const N: usize> Buf2<N> {
 
     /// n = 1 + δ and a = n·dδ/dy at the buffer's heights (as `state::rate`).
     #[inline(always)]
-    fn set_rate<const FMA: bool>(&mut self, c: &Coefficients) {
-        self.n = [0.0; N];
-        self.ay = [0.0; N];
-        c.layers::<N, FMA>(&self.y, &mut self.n, &mut self.ay);
+    fn set_rate<F: LaneField, const FMA: bool>(&mut self, f: &F) {
+        f.layers::<N, FMA>(&self.y, &mut self.n, &mut self.ay);
         for i in 0..N {
             let n = self.n[i] + 1.0;
             self.n[i] = n;
             self.ay[i] *= n;
         }
+    }
+
+    /// Copies the lanes of `mask` from `from`.
+    #[inline(always)]
+    fn keep(&mut self, mask: u64, from: &Self) {
+        keep(mask, &from.x, &mut self.x);
+        keep(mask, &from.y, &mut self.y);
+        keep(mask, &from.z, &mut self.z);
+        keep(mask, &from.vy, &mut self.vy);
+        keep(mask, &from.s, &mut self.s);
+        keep(mask, &from.ay, &mut self.ay);
+        keep(mask, &from.n, &mut self.n);
     }
 }
 
@@ -134,19 +183,19 @@ impl<const N: usize> LaneBuf<N, 5> for Buf2<N> {
 }
 
 /// The 2-D lane kernel; the nearest point keeps (x, y, z, v_y, s).
-struct Lanes2<const N: usize> {
-    c: Coefficients,
+struct Lanes2<'a, F, const N: usize> {
+    field: &'a F,
     set: LaneSet<Buf2<N>, N, 5>,
     /// v_x and v_z, constant along each ray.
     vx: [f64; N],
     vz: [f64; N],
 }
 
-impl<const N: usize> Lanes2<N> {
-    fn new(c: Coefficients) -> Self {
+impl<'a, F: LaneField, const N: usize> Lanes2<'a, F, N> {
+    fn new(field: &'a F, method: Method) -> Self {
         Lanes2 {
-            c,
-            set: LaneSet::new(Buf2::ZERO),
+            field,
+            set: LaneSet::new(Buf2::ZERO, method, field.ceiling()),
             vx: [0.0; N],
             vz: [0.0; N],
         }
@@ -172,30 +221,51 @@ impl<const N: usize> Lanes2<N> {
     }
 }
 
-impl<const N: usize> Kernel<N> for Lanes2<N> {
+impl<F: LaneField, const N: usize> Kernel<N> for Lanes2<'_, F, N> {
+    type Field = F;
+
+    fn field(&self) -> &F {
+        self.field
+    }
+
     fn load(
         &mut self,
         lane: usize,
         job: &RayJob,
         start: &RayState,
         rate: &RayRate,
-        step: f64,
         max_length: f64,
     ) {
         self.vx[lane] = start.v.x;
         self.vz[lane] = start.v.z;
-        self.set.load(lane, job, start, rate, step, max_length);
+        self.set.load(lane, job, start, rate, max_length);
     }
 
     fn freeze(&mut self, lane: usize) {
         self.set.freeze(lane);
     }
 
+    fn stages(&self) -> u64 {
+        stages_per_attempt(self.set.method())
+    }
+
     #[inline(always)]
-    fn step<const FMA: bool>(&mut self) {
-        let (h, y0, stages, y1) = self.set.step_parts();
-        rk4_2d::<N, FMA>(&self.c, h, [&self.vx, &self.vz], y0, stages, y1);
+    fn step<const FMA: bool>(&mut self) -> Attempts {
+        let method = self.set.method();
+        let (control, y0, stages, y1) = self.set.step_parts();
+        let speeds = [&self.vx, &self.vz];
+        let attempts = match method {
+            Method::Rk4 { .. } => {
+                let [k2, k3, k4, _, _] = stages;
+                rk4_2d::<F, N, FMA>(self.field, &control.h, speeds, y0, [k2, k3, k4], y1);
+                Attempts::all::<N>()
+            }
+            Method::Dopri5 { .. } => {
+                dopri5_2d::<F, N, FMA>(self.field, control, speeds, y0, stages, y1)
+            }
+        };
         self.set.flip();
+        attempts
     }
 
     #[inline(always)]
@@ -218,15 +288,24 @@ impl<const N: usize> Kernel<N> for Lanes2<N> {
     }
 }
 
+/// Right-hand-side evaluations per attempted step: 4 for RK4 (the fifth is
+/// the next step's first), 6 for Dormand–Prince (first same as last).
+pub(crate) fn stages_per_attempt(method: Method) -> u64 {
+    match method {
+        Method::Rk4 { .. } => 4,
+        Method::Dopri5 { .. } => 6,
+    }
+}
+
 /// One RK4 step of every lane from `y0` into `y1` (see `rk4_3d` in `kernel.rs`
 /// for why this is a free function on distinct references).
 #[inline(always)]
-fn rk4_2d<const N: usize, const FMA: bool>(
-    c: &Coefficients,
+fn rk4_2d<F: LaneField, const N: usize, const FMA: bool>(
+    c: &F,
     h: &[f64; N],
     [vx, vz]: [&[f64; N]; 2],
     y0: &Buf2<N>,
-    [k2, k3, k4]: &mut [Buf2<N>; 3],
+    [k2, k3, k4]: [&mut Buf2<N>; 3],
     y1: &mut Buf2<N>,
 ) {
     // The stages of the scalar `rk4_step`, restricted to (y, v_y): the
@@ -236,19 +315,19 @@ fn rk4_2d<const N: usize, const FMA: bool>(
         k2.y[i] = fmadd::<FMA>(y0.vy[i], f, y0.y[i]);
         k2.vy[i] = fmadd::<FMA>(y0.ay[i], f, y0.vy[i]);
     }
-    k2.set_rate::<FMA>(c);
+    k2.set_rate::<F, FMA>(c);
     for i in 0..N {
         let f = 0.5 * h[i];
         k3.y[i] = fmadd::<FMA>(k2.vy[i], f, y0.y[i]);
         k3.vy[i] = fmadd::<FMA>(k2.ay[i], f, y0.vy[i]);
     }
-    k3.set_rate::<FMA>(c);
+    k3.set_rate::<F, FMA>(c);
     for i in 0..N {
         let f = h[i];
         k4.y[i] = fmadd::<FMA>(k3.vy[i], f, y0.y[i]);
         k4.vy[i] = fmadd::<FMA>(k3.ay[i], f, y0.vy[i]);
     }
-    k4.set_rate::<FMA>(c);
+    k4.set_rate::<F, FMA>(c);
     for i in 0..N {
         let h6 = (1.0 / 6.0) * h[i];
         let h3 = (1.0 / 3.0) * h[i];
@@ -259,5 +338,87 @@ fn rk4_2d<const N: usize, const FMA: bool>(
         y1.vy[i] = combine::<FMA>(y0.vy[i], [y0.ay[i], k2.ay[i], k3.ay[i], k4.ay[i]], b);
         y1.s[i] = combine::<FMA>(y0.s[i], [y0.n[i], k2.n[i], k3.n[i], k4.n[i]], b);
     }
-    y1.set_rate::<FMA>(c);
+    y1.set_rate::<F, FMA>(c);
+}
+
+/// One Dormand–Prince attempt of every lane from `y0` into `y1`: the scalar
+/// `Stepper::attempt_planar`'s stages on (y, v_y), the horizontal position by
+/// the constant v_x, v_z with the 5th-order weights, the error estimate of the
+/// 3-D step's six components, and each lane's controller (see `adaptive`).
+/// Rejected and underflowed lanes end where they started.
+#[inline(always)]
+fn dopri5_2d<F: LaneField, const N: usize, const FMA: bool>(
+    f: &F,
+    control: &mut Control<N>,
+    [vx, vz]: [&[f64; N]; 2],
+    y0: &Buf2<N>,
+    [k2, k3, k4, k5, k6]: &mut [Buf2<N>; 5],
+    y1: &mut Buf2<N>,
+) -> Attempts {
+    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], &y0.vy);
+    let h = control.used;
+    advance::<N, 1, FMA>(&y0.y, &h, [A21], [&y0.vy], &mut k2.y);
+    advance::<N, 1, FMA>(&y0.vy, &h, [A21], [&y0.ay], &mut k2.vy);
+    k2.set_rate::<F, FMA>(f);
+    advance::<N, 2, FMA>(&y0.y, &h, [A31, A32], [&y0.vy, &k2.vy], &mut k3.y);
+    advance::<N, 2, FMA>(&y0.vy, &h, [A31, A32], [&y0.ay, &k2.ay], &mut k3.vy);
+    k3.set_rate::<F, FMA>(f);
+    let c4 = [A41, A42, A43];
+    advance::<N, 3, FMA>(&y0.y, &h, c4, [&y0.vy, &k2.vy, &k3.vy], &mut k4.y);
+    advance::<N, 3, FMA>(&y0.vy, &h, c4, [&y0.ay, &k2.ay, &k3.ay], &mut k4.vy);
+    k4.set_rate::<F, FMA>(f);
+    let c5 = [A51, A52, A53, A54];
+    advance::<N, 4, FMA>(&y0.y, &h, c5, [&y0.vy, &k2.vy, &k3.vy, &k4.vy], &mut k5.y);
+    advance::<N, 4, FMA>(&y0.vy, &h, c5, [&y0.ay, &k2.ay, &k3.ay, &k4.ay], &mut k5.vy);
+    k5.set_rate::<F, FMA>(f);
+    let c6 = [A61, A62, A63, A64, A65];
+    let dy6 = [&y0.vy, &k2.vy, &k3.vy, &k4.vy, &k5.vy];
+    advance::<N, 5, FMA>(&y0.y, &h, c6, dy6, &mut k6.y);
+    let a6 = [&y0.ay, &k2.ay, &k3.ay, &k4.ay, &k5.ay];
+    advance::<N, 5, FMA>(&y0.vy, &h, c6, a6, &mut k6.vy);
+    k6.set_rate::<F, FMA>(f);
+    let b = [B1, B3, B4, B5, B6];
+    advance::<N, 5, FMA>(
+        &y0.y,
+        &h,
+        b,
+        [&y0.vy, &k3.vy, &k4.vy, &k5.vy, &k6.vy],
+        &mut y1.y,
+    );
+    advance::<N, 5, FMA>(
+        &y0.vy,
+        &h,
+        b,
+        [&y0.ay, &k3.ay, &k4.ay, &k5.ay, &k6.ay],
+        &mut y1.vy,
+    );
+    advance::<N, 5, FMA>(&y0.s, &h, b, [&y0.n, &k3.n, &k4.n, &k5.n, &k6.n], &mut y1.s);
+    advance::<N, 5, FMA>(&y0.x, &h, DOPRI5_WEIGHTS, [vx; 5], &mut y1.x);
+    advance::<N, 5, FMA>(&y0.z, &h, DOPRI5_WEIGHTS, [vz; 5], &mut y1.z);
+    y1.set_rate::<F, FMA>(f);
+    // The 3-D estimate's components: dx = v (constant v_x, v_z), dv = (0, a, 0).
+    let (mut ex, mut ey, mut ez, mut evy) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    constant_error_term(vx, &h, &mut ex);
+    error_term(
+        [&y0.vy, &k3.vy, &k4.vy, &k5.vy, &k6.vy, &y1.vy],
+        &h,
+        &mut ey,
+    );
+    constant_error_term(vz, &h, &mut ez);
+    error_term(
+        [&y0.ay, &k3.ay, &k4.ay, &k5.ay, &k6.ay, &y1.ay],
+        &h,
+        &mut evy,
+    );
+    let mut err2 = [0.0; N];
+    for i in 0..N {
+        err2[i] = (ex[i] * ex[i] + ey[i] * ey[i] + ez[i] * ez[i])
+            + (0.0 * 0.0 + evy[i] * evy[i] + 0.0 * 0.0);
+    }
+    let accepted = judge::<N, FMA>(control, &err2) & !underflow;
+    y1.keep(!accepted, y0);
+    Attempts {
+        accepted,
+        underflow,
+    }
 }
