@@ -54,6 +54,9 @@ pub struct TraceReport {
     pub medium: Medium,
     /// Trace settings used.
     pub trace: TraceSpec,
+    /// The round earth the pairs were traced over (absent: the flat ground).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub earth: Option<crate::trace::EarthSpec>,
     /// Totals.
     #[serde(flatten)]
     pub totals: Totals,
@@ -91,6 +94,7 @@ pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
         problem: problem.name.clone(),
         medium: medium.clone(),
         trace: problem.trace_spec.clone(),
+        earth: problem.trace.earth.spec(),
         totals,
         pairs,
         stats,
@@ -112,7 +116,7 @@ fn trace_all(problem: &Problem, fields: &PairFields) -> Vec<Trace> {
             .collect();
         let jobs: Vec<RayJob> = members
             .iter()
-            .map(|&i| problem.pairs[i].ray_job())
+            .map(|&i| problem.pairs[i].ray_job_on(problem.trace.earth))
             .collect();
         let mut part = vec![Trace::default(); members.len()];
         jobs.par_chunks(CHUNK)

@@ -6,7 +6,7 @@ use crate::math::{Real, V3};
 use crate::medium::IndexField;
 use crate::medium::air::WAVELENGTH_RANGE;
 use crate::trace::batch::RayJob;
-use crate::trace::{RayState, TargetPlane, Trace, TraceOptions, trace};
+use crate::trace::{Earth, RayState, TargetPlane, Trace, TraceOptions, trace};
 use serde::{Deserialize, Serialize};
 
 /// One point pair, as written in a problem file.
@@ -103,35 +103,80 @@ impl PointPair {
         (V3::from(self.through) - self.origin()).normalized()
     }
 
-    /// The plane through the target that faces the observer: its normal is the
-    /// horizontal part of target − origin.
+    /// The plane through the target that faces the observer over the flat
+    /// ground: its normal is the horizontal part of target − origin.
     pub fn plane(&self) -> TargetPlane {
+        self.plane_on(Earth::Flat)
+    }
+
+    /// The plane through the target that faces the observer over `earth`
+    /// (`docs/air.md`): it holds the target and the local vertical there, and
+    /// its normal is the horizontal direction from the origin to the target.
+    pub fn plane_on(&self, earth: Earth) -> TargetPlane {
         let d = self.target() - self.origin();
+        let normal = match earth {
+            // The flat ground's normal, as it always was (bit for bit).
+            Earth::Flat => V3::new(d.x, 0.0, d.z).normalized(),
+            Earth::Round { .. } => earth
+                .plane_normal(self.origin(), self.target())
+                .unwrap_or_else(|| V3::new(d.x, 0.0, d.z).normalized()),
+        };
         TargetPlane {
             point: self.target(),
-            normal: V3::new(d.x, 0.0, d.z).normalized(),
+            normal,
         }
     }
 
-    /// This pair's ray as a batch job, traced as [`PointPair::evaluate`]
-    /// traces it.
+    /// This pair's ray as a batch job over the flat ground, traced as
+    /// [`PointPair::evaluate`] traces it.
     pub fn ray_job(&self) -> RayJob {
+        self.ray_job_on(Earth::Flat)
+    }
+
+    /// This pair's ray as a batch job over `earth`.
+    pub fn ray_job_on(&self, earth: Earth) -> RayJob {
         RayJob {
             origin: self.origin(),
             direction: self.direction(),
-            target: self.plane(),
+            target: self.plane_on(earth),
         }
     }
 
-    /// Traces this pair's ray and returns its trace and residual
-    /// `r = w·(e − target)`.
+    /// The checks that depend on the ground: over the round earth the origin
+    /// must not lie below the sphere, and the target must have a horizontal
+    /// direction from the origin at its own vertical.
+    pub fn validate_on(&self, earth: Earth) -> Result<(), FieldError> {
+        let Earth::Round { radius } = earth else {
+            return Ok(());
+        };
+        let h = earth.height(self.origin());
+        if h < 0.0 {
+            return Err(FieldError::new(
+                "origin",
+                format!(
+                    "lies {:.6} m below the ground (the sphere of radius {radius} m centred at (0, −{radius}, 0)): an observer stands on or above it",
+                    -h
+                ),
+            ));
+        }
+        if earth.plane_normal(self.origin(), self.target()).is_none() {
+            return Err(FieldError::new(
+                "target",
+                "is straight above or below `origin` along the local vertical: the target plane (facing the observer) is undefined".to_string(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Traces this pair's ray (over `options.earth`) and returns its trace
+    /// and residual `r = w·(e − target)`.
     pub fn evaluate<T: Real, F: IndexField<T> + ?Sized>(
         &self,
         field: &F,
         options: &TraceOptions,
         path: Option<&mut Vec<RayState>>,
     ) -> (Trace<T>, V3<T>) {
-        let plane = self.plane();
+        let plane = self.plane_on(options.earth);
         let t = trace(
             field,
             self.origin(),

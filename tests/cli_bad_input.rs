@@ -622,3 +622,48 @@ fn dispersion_on_a_logistic_scene() {
     );
     assert!(!output.exists());
 }
+
+#[test]
+fn a_round_earth_that_is_not_one() {
+    let earth = |e: &str| edit(r#""solver": {"#, &format!(r#""earth": {e}, "solver": {{"#));
+    // The good problem over the earth is accepted (traced, exit 0).
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("problem.json");
+    std::fs::write(&input, earth(r#"{"radius": 6371000.0}"#)).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("trace")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    rejects(&earth(r#"{"radius": 0.0}"#), &["earth.radius", "positive"]);
+    rejects(
+        &earth(r#"{"radius": -6371000.0}"#),
+        &["earth.radius", "positive"],
+    );
+    rejects(
+        &earth(r#"{"radius": 500.0}"#),
+        &["earth.radius", "at least 1000 m"],
+    );
+    rejects(
+        &earth(r#"{"radius": "big"}"#),
+        &["earth.radius", "invalid type"],
+    );
+    rejects(
+        &earth(r#"{"radius": 6371000.0, "centre": [0, 0, 0]}"#),
+        &["earth", "unknown field `centre`"],
+    );
+    rejects(&earth(r#"{}"#), &["earth", "missing field `radius`"]);
+    rejects(&earth("6371000.0"), &["earth", "invalid type"]);
+    // An observer below the sphere: 1 km out, the sphere is 7.8 cm above
+    // the tangent plane's y = -0.0785.
+    let below = earth(r#"{"radius": 6371000.0}"#).replace(
+        r#""origin": [0.0, 1.6, 0.0]"#,
+        r#""origin": [1000.0, -0.1, 0.0]"#,
+    );
+    rejects(&below, &["pairs[0].origin", "below the ground", "sphere"]);
+}

@@ -66,6 +66,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
     let implied_air = crate::profile::implied_air_summary(&medium);
     let report = FitReport {
         problem: problem.name.clone(),
+        earth: problem.trace.earth.spec(),
         medium,
         parameters,
         undetermined: ident.undetermined,

@@ -69,7 +69,7 @@ impl Objective {
         Objective {
             template: template.into(),
             free,
-            jobs: pairs.iter().map(PointPair::ray_job).collect(),
+            jobs: pairs.iter().map(|p| p.ray_job_on(options.earth)).collect(),
             pairs,
             options,
             residual_evaluations: AtomicU64::new(0),

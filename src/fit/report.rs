@@ -102,6 +102,9 @@ pub struct FitReport {
     pub history: crate::fit::History,
     /// Trace settings used.
     pub trace: TraceSpec,
+    /// The round earth the pairs were traced over (absent: the flat ground).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub earth: Option<crate::trace::EarthSpec>,
     /// For a medium that is not real air: the air that makes the same mirage
     /// (`crate::profile`, as `mirage air` reports it), in brief.
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -37,7 +37,7 @@ use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::{Medium, Param};
 use crate::pair::PointPair;
-use crate::trace::TraceOptions;
+use crate::trace::{Earth, EarthSpec, TraceOptions};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -68,6 +68,9 @@ pub struct ProblemFile {
     /// Solver settings.
     #[serde(default)]
     pub solver: SolverSpec,
+    /// The round earth (`{"radius": R}`); absent: the flat ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub earth: Option<EarthSpec>,
 }
 
 /// A validated problem.
@@ -87,7 +90,7 @@ pub struct Problem {
     pub bounds: Vec<(f64, f64)>,
     /// The point pairs.
     pub pairs: Vec<PointPair>,
-    /// Integration settings.
+    /// Integration settings, the ground (`earth`) included.
     pub trace: TraceOptions,
     /// The `trace` section, normalised (echoed in results).
     pub trace_spec: TraceSpec,
@@ -115,8 +118,13 @@ impl Problem {
             .validate()
             .map_err(|e| e.within("medium").in_file(path))?;
 
+        if let Some(e) = &file.earth {
+            e.validate().map_err(|e| e.within("earth").in_file(path))?;
+        }
+        let earth = Earth::from(file.earth);
         for (i, pair) in file.pairs.iter().enumerate() {
             pair.validate()
+                .and_then(|()| pair.validate_on(earth))
                 .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
             if pair.wavelength.is_some() && !file.medium.is_dispersive() {
                 return Err(bad(
@@ -196,7 +204,8 @@ impl Problem {
             bounds[k] = (low, high);
         }
 
-        let (trace, trace_spec) = trace_options(&file.trace, path)?;
+        let (mut trace, trace_spec) = trace_options(&file.trace, path)?;
+        trace.earth = earth;
         let solver = solver_settings(&file.solver, path)?;
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()

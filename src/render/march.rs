@@ -537,7 +537,7 @@ fn ground_crossing(seg: &Segment<f64>) -> Option<f64> {
     if seg.y0.x.y < 0.0 {
         return Some(0.0);
     }
-    crate::trace::first_ground_crossing(seg)
+    crate::trace::first_ground_crossing(seg, crate::trace::Earth::Flat)
 }
 
 /// A camera ray on an interpolated table path.

@@ -8,7 +8,7 @@
 //! in the tracer's number type (dual numbers carry the implicit derivative).
 
 use super::hermite::{Segment, bracketed_root};
-use super::{GroundMode, RayState, TargetPlane};
+use super::{Earth, GroundMode, RayState, TargetPlane};
 use crate::math::{Real, V3};
 
 /// How a step ends the ray, with θ ∈ [0, 1] along the step where it does.
@@ -42,6 +42,7 @@ pub(crate) fn decide_step(
     target: Option<&TargetPlane>,
     ground: GroundMode,
     max_length: f64,
+    earth: Earth,
 ) -> StepEvents {
     let plane_theta = target
         .filter(|t| t.signed_distance(seg.y1.x) >= 0.0)
@@ -51,8 +52,8 @@ pub(crate) fn decide_step(
                 (t.signed_distance(x), dx.dot(t.normal))
             })
         });
-    let ground_theta = if seg.y0.x.y >= 0.0 {
-        first_ground_crossing(seg)
+    let ground_theta = if earth.height(seg.y0.x) >= 0.0 {
+        first_ground_crossing(seg, earth)
     } else {
         None
     };
@@ -72,36 +73,55 @@ pub(crate) fn decide_step(
     }
 }
 
-/// The first θ ∈ [0, 1] where the step goes below y = 0, given y ≥ 0 at its start.
-pub(crate) fn first_ground_crossing(seg: &Segment<f64>) -> Option<f64> {
+/// The first θ ∈ [0, 1] where the step goes below the ground (y = 0, or the
+/// sphere), given that it starts on or above it.
+pub(crate) fn first_ground_crossing(seg: &Segment<f64>, earth: Earth) -> Option<f64> {
+    // The height along the step and its rate dh/dθ = ∇h · dx/dθ.
     let height = |th: f64| {
         let (x, dx) = seg.position_and_slope(th);
-        (x.y, dx.y)
+        let (h, up) = earth.height_and_up(x);
+        (h, dx.dot(up))
     };
-    if seg.y1.x.y < 0.0 {
+    if earth.height(seg.y1.x) < 0.0 {
         return Some(bracketed_root(0.0, 1.0, height));
     }
     // Both ends above ground: the step can still dip below it if it turns from
     // descending to rising inside (a mirage ray's lowest point).
-    if seg.f0.dx.y < 0.0 && seg.f1.dx.y > 0.0 {
+    let rate = |x: V3, v: V3| v.dot(earth.up(x));
+    if rate(seg.y0.x, seg.f0.dx) < 0.0 && rate(seg.y1.x, seg.f1.dx) > 0.0 {
         let slope = |th: f64| {
-            let (_, dx) = seg.position_and_slope(th);
-            // d²x/dθ² by a central difference of the analytic slope: only the
+            let (_, rate) = height(th);
+            // d²h/dθ² by a central difference of the analytic rate: only the
             // sign pattern matters for bracketing the minimum.
             let e = 1e-6;
-            let (_, dxp) = seg.position_and_slope((th + e).min(1.0));
-            let (_, dxm) = seg.position_and_slope((th - e).max(0.0));
-            (
-                dx.y,
-                (dxp.y - dxm.y) / ((th + e).min(1.0) - (th - e).max(0.0)),
-            )
+            let (hi, lo) = ((th + e).min(1.0), (th - e).max(0.0));
+            (rate, (height(hi).1 - height(lo).1) / (hi - lo))
         };
         let lowest = bracketed_root(0.0, 1.0, slope);
-        if seg.position(lowest).y < 0.0 {
+        if earth.height(seg.position(lowest)) < 0.0 {
             return Some(bracketed_root(0.0, lowest, height));
         }
     }
     None
+}
+
+/// Where the step meets the ground at θ (found on the real trajectory): on
+/// the flat ground [`locate`] on y = 0; over the sphere, on the plane tangent
+/// to it below the point at θ, whose Newton step is that of the sphere to
+/// first order, so dual parts carry the implicit derivative as on the plane.
+pub(crate) fn locate_ground<T: Real>(
+    seg: &Segment<T>,
+    real: &Segment<f64>,
+    theta: f64,
+    earth: Earth,
+) -> (V3<T>, RayState) {
+    match earth {
+        Earth::Flat => locate(seg, real, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO),
+        Earth::Round { .. } => {
+            let at = real.position(theta);
+            locate(seg, real, theta, earth.up(at), earth.foot(at))
+        }
+    }
 }
 
 /// The point where the step meets the plane through `point` with `normal`,

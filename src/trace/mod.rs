@@ -9,6 +9,7 @@
 //! returns the exact derivative of the discrete endpoint map (see `fit`).
 
 pub mod batch;
+pub mod earth;
 mod event;
 pub mod fastexp;
 pub mod hermite;
@@ -16,6 +17,7 @@ mod scalar;
 pub mod state;
 mod stepper;
 
+pub use earth::{Earth, EarthSpec, OnEarth};
 pub use hermite::Segment;
 pub use state::{RayRate, RayState};
 pub use stepper::{Method, rk4_step};
@@ -27,7 +29,8 @@ pub use scalar::trace;
 use crate::math::{Real, V3};
 use serde::Serialize;
 
-/// What happens when a ray reaches the ground (y = 0).
+/// What happens when a ray reaches the ground (y = 0, or the sphere of
+/// [`Earth::Round`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum GroundMode {
     /// Flag the ray as occluded and go on: the medium is defined below ground, so
@@ -49,6 +52,9 @@ pub struct TraceOptions {
     pub ground: GroundMode,
     /// Hard cap on integration steps (accepted + rejected), against runaway.
     pub max_steps: u64,
+    /// The ground: flat, or the round earth (heights, the ground's events
+    /// and the media's vertical all follow it).
+    pub earth: Earth,
 }
 
 impl TraceOptions {
@@ -59,6 +65,7 @@ impl TraceOptions {
             max_length: None,
             ground: GroundMode::Flag,
             max_steps: 10_000_000,
+            earth: Earth::Flat,
         }
     }
 }

@@ -4,17 +4,41 @@
 //! `event::decide_step`, and the dual-number endpoint is refined apart by
 //! `event::locate`.
 
-use super::event::{StepEnd, locate};
+use super::event::{StepEnd, locate_ground};
 use super::stepper::{Attempt, Stepper};
-use super::{End, RayState, Segment, Stats, TargetPlane, Trace, TraceOptions, state};
+use super::{
+    Earth, End, OnEarth, RayState, Segment, Stats, TargetPlane, Trace, TraceOptions, event::locate,
+    state,
+};
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
 
 /// Traces the ray from `origin` along the unit vector `direction` until it
 /// crosses `target` (if given), reaches the ground in [`GroundMode::Stop`](super::GroundMode::Stop), or
 /// travels the maximum length. If `path` is given, the start and every step's end
-/// are appended to it (for plots); nothing is allocated otherwise.
+/// are appended to it (for plots); nothing is allocated otherwise. Over the
+/// round earth (`options.earth`) the medium is evaluated at heights above
+/// the sphere ([`OnEarth`]) and the ground is the sphere.
 pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
+    field: &F,
+    origin: V3,
+    direction: V3,
+    target: Option<&TargetPlane>,
+    options: &TraceOptions,
+    path: Option<&mut Vec<RayState>>,
+) -> Trace<T> {
+    match options.earth {
+        Earth::Flat => trace_over(field, origin, direction, target, options, path),
+        Earth::Round { radius } => {
+            let field = OnEarth { field, radius };
+            trace_over(&field, origin, direction, target, options, path)
+        }
+    }
+}
+
+/// [`trace`] through `field` as the tracer sees it (over the round earth,
+/// already mapped to heights).
+fn trace_over<T: Real, F: IndexField<T> + ?Sized>(
     field: &F,
     origin: V3,
     direction: V3,
@@ -22,6 +46,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
     options: &TraceOptions,
     mut path: Option<&mut Vec<RayState>>,
 ) -> Trace<T> {
+    let earth = options.earth;
     let max_length = match (options.max_length, target) {
         (Some(l), _) => l,
         (None, Some(t)) => 4.0 * (t.point - origin).norm(),
@@ -44,7 +69,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
 
     let plane_distance =
         |x: V3<T>| target.map_or(f64::NEG_INFINITY, |t| t.signed_distance(x).val());
-    let mut occluded = origin.y < 0.0;
+    let mut occluded = earth.height(origin) < 0.0;
     let mut nearest = (plane_distance(y.x).abs(), y);
     let mut steps = 0u64;
     // A stratified field keeps the ray in its vertical plane: the planar
@@ -74,7 +99,8 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
             );
         }
         steps += 1;
-        stepper.limit(field.step_limit(y.x.y.val(), y.v.y.val()));
+        let (h, up) = earth.height_and_up(y.x.val());
+        stepper.limit(field.step_limit(h, y.v.val().dot(up)));
         let attempt = if planar {
             stepper.attempt_planar(field, &y, &f, &mut stats.rhs_evaluations)
         } else {
@@ -111,14 +137,14 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
             p.push(real.y1);
         }
 
-        if real.y1.x.y > ceiling {
+        if earth.height(real.y1.x) > ceiling {
             return finish(y1.x, real.y1.v, real.y1.s, End::LeftAir, occluded, stats);
         }
         let d = plane_distance(y1.x).abs();
         if d < nearest.0 {
             nearest = (d, y1);
         }
-        let events = super::event::decide_step(&real, target, options.ground, max_length);
+        let events = super::event::decide_step(&real, target, options.ground, max_length, earth);
         occluded |= events.occluded;
         match events.end {
             Some(StepEnd::Plane(theta)) => {
@@ -127,7 +153,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
                 return finish(endpoint, st.v, st.s, End::Plane, occluded, stats);
             }
             Some(StepEnd::Ground(theta)) => {
-                let (endpoint, st) = locate(&seg, &real, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
+                let (endpoint, st) = locate_ground(&seg, &real, theta, earth);
                 return finish(endpoint, st.v, st.s, End::Ground, occluded, stats);
             }
             Some(StepEnd::MaxLength) => {

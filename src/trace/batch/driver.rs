@@ -231,7 +231,7 @@ fn after_step(
         return Some(finished(y1.x, y1.v, y1.s, End::LeftAir, slot, stages));
     }
     let t = &job.target;
-    let events = decide_step(seg, Some(t), options.ground, slot.max_length);
+    let events = decide_step(seg, Some(t), options.ground, slot.max_length, options.earth);
     slot.occluded |= events.occluded;
     let end = match events.end {
         Some(StepEnd::Plane(theta)) => {

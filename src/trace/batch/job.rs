@@ -2,7 +2,7 @@
 //! ([`BatchOptions`]).
 
 use crate::math::V3;
-use crate::trace::{GroundMode, Method, TargetPlane, TraceOptions};
+use crate::trace::{Earth, GroundMode, Method, TargetPlane, TraceOptions};
 
 /// One ray to trace: where it starts, where it looks, the plane it must reach.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +27,8 @@ pub struct BatchOptions {
     pub ground: GroundMode,
     /// Cap on steps per ray.
     pub max_steps: u64,
+    /// The ground.
+    pub earth: Earth,
 }
 
 impl BatchOptions {
@@ -37,6 +39,7 @@ impl BatchOptions {
             max_length: options.max_length,
             ground: options.ground,
             max_steps: options.max_steps,
+            earth: options.earth,
         }
     }
 
@@ -47,6 +50,7 @@ impl BatchOptions {
             max_length: self.max_length,
             ground: self.ground,
             max_steps: self.max_steps,
+            earth: self.earth,
         }
     }
 }
