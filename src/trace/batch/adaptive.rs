@@ -78,9 +78,9 @@ pub(crate) fn prepare<F: LaneField, const N: usize>(
     field: &F,
     control: &mut Control<N>,
     [x, y, z]: [&[f64; N]; 3],
-    vy: &[f64; N],
+    v: [&[f64; N]; 3],
 ) -> u64 {
-    field.cap_steps(y, vy, &mut control.h);
+    field.cap_steps_at([x, y, z], v, &mut control.h);
     control.used = control.h;
     let mut underflow = 0u64;
     for i in 0..N {

@@ -9,7 +9,7 @@ use super::job::{BatchOptions, RayJob};
 use super::lanes::Attempts;
 use crate::math::V3;
 use crate::medium::IndexField;
-use crate::trace::event::{StepEnd, decide_step, locate};
+use crate::trace::event::{StepEnd, decide_step, locate, locate_ground};
 use crate::trace::{End, RayRate, RayState, Segment, Stats, Trace, state};
 
 /// A trace that the driver overwrites (slots of the output before tracing).
@@ -196,7 +196,7 @@ fn refill<K: Kernel<N>, const N: usize>(
             start: global,
             accepted: 0,
             rejected: 0,
-            occluded: job.origin.y < 0.0,
+            occluded: options.earth.height(job.origin) < 0.0,
             max_length,
         };
         if options.max_steps == 0 {
@@ -226,7 +226,7 @@ fn after_step(
     stages: u64,
     nearest: impl FnOnce() -> RayState,
 ) -> Option<Trace> {
-    if seg.y1.x.y > ceiling {
+    if options.earth.height(seg.y1.x) > ceiling {
         let y1 = &seg.y1;
         return Some(finished(y1.x, y1.v, y1.s, End::LeftAir, slot, stages));
     }
@@ -239,7 +239,7 @@ fn after_step(
             return Some(finished(e, st.v, st.s, End::Plane, slot, stages));
         }
         Some(StepEnd::Ground(theta)) => {
-            let (e, st) = locate(seg, seg, theta, V3::new(0.0, 1.0, 0.0), V3::ZERO);
+            let (e, st) = locate_ground(seg, seg, theta, options.earth);
             return Some(finished(e, st.v, st.s, End::Ground, slot, stages));
         }
         Some(StepEnd::MaxLength) => End::MaxLength,

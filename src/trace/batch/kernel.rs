@@ -9,7 +9,7 @@
 use super::adaptive::{advance, error_term, judge, keep, prepare};
 use super::air::AirLanes;
 use super::driver::Kernel;
-use super::field::{LaneField, LogisticLanes};
+use super::field::{EarthLanes, LaneField, LogisticLanes};
 use super::isa::{Isa, run};
 use super::job::{BatchOptions, RayJob};
 use super::lanes::{Attempts, Control, LANES, LaneBuf, LaneSet, combine};
@@ -21,7 +21,7 @@ use crate::trace::fastexp::fmadd;
 use crate::trace::stepper::{
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65, B1, B3, B4, B5, B6,
 };
-use crate::trace::{Method, RayRate, RayState, Segment, Trace};
+use crate::trace::{Earth, Method, RayRate, RayState, Segment, Trace};
 
 /// Traces every job with the 3-D lanes kernel built for `isa` (any field).
 ///
@@ -51,8 +51,23 @@ pub fn trace_air_3d(
     trace_3d(isa, &AirLanes::new(field), jobs, options, out);
 }
 
-/// The 3-D kernel over any lane field.
+/// The 3-D kernel over any lane field, over the flat ground or the sphere
+/// (the field then seen through [`EarthLanes`]).
 fn trace_3d<F: LaneField>(
+    isa: Isa,
+    field: &F,
+    jobs: &[RayJob],
+    options: &BatchOptions,
+    out: &mut [Trace],
+) {
+    match options.earth {
+        Earth::Flat => run_3d(isa, field, jobs, options, out),
+        Earth::Round { radius } => run_3d(isa, &EarthLanes::new(field, radius), jobs, options, out),
+    }
+}
+
+/// The 3-D kernel over a lane field as the tracer sees it.
+fn run_3d<F: LaneField>(
     isa: Isa,
     field: &F,
     jobs: &[RayJob],
@@ -64,7 +79,7 @@ fn trace_3d<F: LaneField>(
     if jobs.len() <= LANES / 2 {
         run(
             isa,
-            &mut Lanes3::<F, { LANES / 2 }>::new(field, options.method),
+            &mut Lanes3::<F, { LANES / 2 }>::new(field, options),
             jobs,
             options,
             out,
@@ -72,7 +87,7 @@ fn trace_3d<F: LaneField>(
     } else {
         run(
             isa,
-            &mut Lanes3::<F, LANES>::new(field, options.method),
+            &mut Lanes3::<F, LANES>::new(field, options),
             jobs,
             options,
             out,
@@ -194,6 +209,11 @@ impl<const N: usize> LaneBuf<N, 7> for Buf3<N> {
     fn screened(&self) -> [&[f64; N]; 5] {
         [&self.x, &self.y, &self.z, &self.vy, &self.s]
     }
+
+    #[inline(always)]
+    fn horizontal_velocity(&self) -> Option<[&[f64; N]; 2]> {
+        Some([&self.vx, &self.vz])
+    }
 }
 
 /// The 3-D lane kernel: the full field, hot spots included; the nearest
@@ -204,10 +224,10 @@ struct Lanes3<'a, F, const N: usize> {
 }
 
 impl<'a, F: LaneField, const N: usize> Lanes3<'a, F, N> {
-    fn new(field: &'a F, method: Method) -> Self {
+    fn new(field: &'a F, options: &BatchOptions) -> Self {
         Lanes3 {
             field,
-            set: LaneSet::new(Buf3::ZERO, method, field.ceiling()),
+            set: LaneSet::new(Buf3::ZERO, options.method, field.ceiling(), options.earth),
         }
     }
 }
@@ -347,7 +367,7 @@ fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
     [k2, k3, k4, k5, k6]: &mut [Buf3<N>; 5],
     y1: &mut Buf3<N>,
 ) -> Attempts {
-    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], &y0.vy);
+    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], [&y0.vx, &y0.vy, &y0.vz]);
     let h = control.used;
     // A stage state y0 + h·Σ a_j k_j, component by component: position
     // from the stages' v, v from their a.

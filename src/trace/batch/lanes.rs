@@ -11,7 +11,7 @@
 
 use super::job::RayJob;
 use crate::trace::fastexp::fmadd;
-use crate::trace::{Method, RayRate, RayState, Segment};
+use crate::trace::{Earth, Method, RayRate, RayState, Segment};
 
 /// Rays traced side by side: two AVX-512 (four AVX2) registers per
 /// operation. Measured faster than 8 (too few independent chains to hide the
@@ -46,6 +46,11 @@ pub(crate) trait LaneBuf<const N: usize, const M: usize>: Copy {
     fn tracked(&self) -> [&[f64; N]; M];
     /// The components the event screen reads: x, y, z, v_y, s.
     fn screened(&self) -> [&[f64; N]; 5];
+    /// v_x and v_z, where the buffer holds them (the 3-D kernel's); the
+    /// screen over the round earth needs the whole velocity.
+    fn horizontal_velocity(&self) -> Option<[&[f64; N]; 2]> {
+        None
+    }
 }
 
 /// Each lane's step control. RK4: `h` is the fixed step. Dormand–Prince: the
@@ -101,6 +106,8 @@ pub(crate) struct LaneSet<B, const N: usize, const M: usize> {
     /// The medium's ceiling (`IndexField::ceiling`): a ray that rises past it
     /// has left the air.
     ceiling: f64,
+    /// The ground: heights for the ground and the ceiling are taken above it.
+    earth: Earth,
     /// Distance to the plane of the nearest point so far, and that point's
     /// tracked components.
     near_d: [f64; N],
@@ -109,7 +116,15 @@ pub(crate) struct LaneSet<B, const N: usize, const M: usize> {
 
 impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     /// Every lane idle, its buffers `zero` (a state harmless to step).
-    pub(crate) fn new(zero: B, method: Method, ceiling: f64) -> Self {
+    ///
+    /// # Panics
+    /// Over the round earth, if the buffers do not hold the horizontal
+    /// velocity the screen needs (the 2-D kernel's do not).
+    pub(crate) fn new(zero: B, method: Method, ceiling: f64, earth: Earth) -> Self {
+        assert!(
+            earth.is_flat() || zero.horizontal_velocity().is_some(),
+            "this kernel traces over the flat ground only"
+        );
         LaneSet {
             buf: [zero; 2],
             stages: [zero; 5],
@@ -128,6 +143,7 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
             plane: [[0.0; N]; 6],
             max_length: [f64::INFINITY; N],
             ceiling,
+            earth,
             near_d: [f64::INFINITY; N],
             near: [[0.0; N]; M],
         }
@@ -224,6 +240,14 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     pub(crate) fn scan(&mut self) -> u64 {
         let y0 = &self.buf[self.cur ^ 1];
         let y1 = &self.buf[self.cur];
+        let round = match self.earth {
+            Earth::Flat => None,
+            Earth::Round { radius } => Some(Round {
+                radius,
+                before: y0.horizontal_velocity().expect("checked in `new`"),
+                after: y1.horizontal_velocity().expect("checked in `new`"),
+            }),
+        };
         scan(
             y0.screened(),
             y1.screened(),
@@ -231,6 +255,7 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
             &self.plane,
             &self.max_length,
             self.ceiling,
+            round,
             &mut self.near_d,
             &mut self.near,
         )
@@ -260,6 +285,25 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
     }
 }
 
+/// What the screen needs over the round earth: the radius and v_x, v_z
+/// before and after the step.
+struct Round<'a, const N: usize> {
+    radius: f64,
+    before: [&'a [f64; N]; 2],
+    after: [&'a [f64; N]; 2],
+}
+
+/// A height above the sphere of radius `r` (as `Earth::height`) and the sign
+/// carrier of the vertical speed, v·(p − c).
+#[inline(always)]
+fn above(r: f64, p: [f64; 3], v: [f64; 3]) -> (f64, f64) {
+    let [x, y, z] = p;
+    let qy = y + r;
+    let q = (x * x + qy * qy + z * z).sqrt();
+    let h = (x * x + z * z + y * (y + 2.0 * r)) / (q + r);
+    (h, v[0] * x + v[1] * qy + v[2] * z)
+}
+
 /// The event screen on distinct references (see [`LaneSet::step_parts`] for
 /// why):
 /// updates the nearest points from `now` and returns the lanes whose step
@@ -274,12 +318,32 @@ fn scan<const N: usize, const M: usize>(
     plane: &[[f64; N]; 6],
     max_length: &[f64; N],
     ceiling: f64,
+    round: Option<Round<'_, N>>,
     near_d: &mut [f64; N],
     near: &mut [[f64; N]; M],
 ) -> u64 {
     let [px, py, pz, nx, ny, nz] = plane;
-    let [_, y0y, _, y0vy, _] = y0;
+    let [y0x, y0y, y0z, y0vy, _] = y0;
     let [x, y, z, vy, s] = y1;
+    // Heights and vertical speeds (their signs): y and v_y over the flat
+    // ground, computed apart over the sphere.
+    let mut heights = [[0.0; N]; 4];
+    let [h0, vh0, h1, vh1]: [&[f64; N]; 4] = match &round {
+        None => [y0y, y0vy, y, vy],
+        Some(Round {
+            radius,
+            before: [vx0, vz0],
+            after: [vx1, vz1],
+        }) => {
+            let [a, b, c, d] = &mut heights;
+            for i in 0..N {
+                (a[i], b[i]) = above(*radius, [y0x[i], y0y[i], y0z[i]], [vx0[i], y0vy[i], vz0[i]]);
+                (c[i], d[i]) = above(*radius, [x[i], y[i], z[i]], [vx1[i], vy[i], vz1[i]]);
+            }
+            let [a, b, c, d] = &heights;
+            [a, b, c, d]
+        }
+    };
     let mut mask = 0u64;
     for i in 0..N {
         // `TargetPlane::signed_distance`, operation for operation.
@@ -291,9 +355,9 @@ fn scan<const N: usize, const M: usize>(
             near[k][i] = if closer { now[k][i] } else { near[k][i] };
         }
         let crossed = g >= -CROSSING_MARGIN;
-        let ground = (y0y[i] >= 0.0) & ((y[i] < 0.0) | ((y0vy[i] < 0.0) & (vy[i] > 0.0)));
+        let ground = (h0[i] >= 0.0) & ((h1[i] < 0.0) | ((vh0[i] < 0.0) & (vh1[i] > 0.0)));
         let long = s[i] >= max_length[i];
-        let high = y[i] > ceiling;
+        let high = h1[i] > ceiling;
         mask |= u64::from(crossed | ground | long | high) << i;
     }
     mask

@@ -95,12 +95,12 @@ use crate::medium::Field;
 use crate::trace::{Trace, trace};
 
 /// Traces every job by the fastest path for this field and CPU: for the
-/// logistic kind and real air over the flat ground, the 2-D [`stratified`]
-/// kernel when the field has no hot spots and the 3-D lanes kernel
-/// otherwise; the analytic test medium (no lane form) and the round earth
-/// through the general scalar tracer [`crate::trace::trace`], job by job,
-/// with the same options, so the results mean the same. `result[i]` is the
-/// trace of `jobs[i]`.
+/// logistic kind and real air, the 2-D [`stratified`] kernel when the field
+/// has no hot spots and the ground is flat, and the 3-D lanes kernel
+/// otherwise (over the round earth too); the analytic test medium (no lane
+/// form) through the general scalar tracer [`crate::trace::trace`], job by
+/// job, with the same options, so the results mean the same. `result[i]` is
+/// the trace of `jobs[i]`.
 pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Vec<Trace> {
     let mut out = vec![driver::placeholder(); jobs.len()];
     trace_batch_into(field, jobs, options, &mut out);
@@ -114,10 +114,6 @@ pub fn trace_batch(field: &Field, jobs: &[RayJob], options: &BatchOptions) -> Ve
 /// If `out.len() != jobs.len()`.
 pub fn trace_batch_into(field: &Field, jobs: &[RayJob], options: &BatchOptions, out: &mut [Trace]) {
     let isa = Isa::detect();
-    if !options.earth.is_flat() {
-        // The lanes screen and step over the flat ground only.
-        return trace_scalar(field, jobs, options, out);
-    }
     match field {
         Field::Logistic(field) => {
             if trace_batch_2d(isa, field, jobs, options, out).is_err() {

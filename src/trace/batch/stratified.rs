@@ -44,11 +44,15 @@ use crate::trace::stepper::{
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65, B1, B3, B4, B5, B6,
     DOPRI5_WEIGHTS,
 };
-use crate::trace::{Method, RayRate, RayState, Segment, Trace};
+use crate::trace::{Earth, Method, RayRate, RayState, Segment, Trace};
 
-/// The field has hot spots, so δ depends on x and z too.
+/// The field has hot spots, so δ depends on x and z too, or it lies over the
+/// round earth, whose vertical turns with the position: either way a ray
+/// does not keep a constant horizontal velocity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("the medium has hot spots: it is not stratified, use the 3-D path")]
+#[error(
+    "the medium has hot spots or lies over the round earth: it is not stratified, use the 3-D path"
+)]
 pub struct NotStratified;
 
 /// Traces every job with the 2-D kernel built for `isa`, or returns
@@ -88,7 +92,7 @@ fn trace_2d<F: LaneField>(
     options: &BatchOptions,
     out: &mut [Trace],
 ) -> Result<(), NotStratified> {
-    if !field.is_stratified() {
+    if !field.is_stratified() || !options.earth.is_flat() {
         return Err(NotStratified);
     }
     // Half-width lanes for small batches, as in `trace_batch_3d`.
@@ -195,7 +199,7 @@ impl<'a, F: LaneField, const N: usize> Lanes2<'a, F, N> {
     fn new(field: &'a F, method: Method) -> Self {
         Lanes2 {
             field,
-            set: LaneSet::new(Buf2::ZERO, method, field.ceiling()),
+            set: LaneSet::new(Buf2::ZERO, method, field.ceiling(), Earth::Flat),
             vx: [0.0; N],
             vz: [0.0; N],
         }
@@ -355,7 +359,7 @@ fn dopri5_2d<F: LaneField, const N: usize, const FMA: bool>(
     [k2, k3, k4, k5, k6]: &mut [Buf2<N>; 5],
     y1: &mut Buf2<N>,
 ) -> Attempts {
-    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], &y0.vy);
+    let underflow = prepare(f, control, [&y0.x, &y0.y, &y0.z], [vx, &y0.vy, vz]);
     let h = control.used;
     advance::<N, 1, FMA>(&y0.y, &h, [A21], [&y0.vy], &mut k2.y);
     advance::<N, 1, FMA>(&y0.vy, &h, [A21], [&y0.ay], &mut k2.vy);
