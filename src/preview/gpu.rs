@@ -4,7 +4,8 @@
 //! Without a GPU, Mesa's software Vulkan (lavapipe, Debian
 //! `mesa-vulkan-drivers libvulkan1`) serves: wgpu picks it as a `Cpu` adapter.
 
-use super::pack::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers};
+use super::layout::GpuRay;
+use super::pack::{SKY_HEIGHT, SKY_WIDTH, SceneBuffers, passes};
 use super::shader::{WORKGROUP, trace_shader};
 use crate::error::{Error, Result};
 use wgpu::util::DeviceExt;
@@ -76,11 +77,22 @@ pub struct Tracer {
     near: wgpu::Buffer,
     stars: wgpu::Buffer,
     air_table: wgpu::Buffer,
+    /// The rays of a band's pixels between passes ([`GpuRay`]).
+    rays: wgpu::Buffer,
+    /// Per band `[first row, rows, 0, 0]`, one at each multiple of
+    /// `band_stride` (bound at a dynamic offset).
+    bands: wgpu::Buffer,
+    band_stride: u32,
+    band_count: u32,
+    band_rows: u32,
+    band_bytes: u64,
     sky: wgpu::Texture,
     output: wgpu::Texture,
     bind_group: wgpu::BindGroup,
     width: u32,
     height: u32,
+    /// Passes a frame ([`passes`]).
+    passes: u32,
 }
 
 /// Records the copy of `texture` (`bytes_per_texel` bytes a texel) into a new
@@ -146,6 +158,47 @@ fn storage_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buf
     })
 }
 
+/// The most bytes of ray states a band takes (a quarter of a GiB; devices
+/// may bind less: lavapipe 128 MiB, 1.4 million pixels).
+pub const BAND_BYTES: u64 = 1 << 28;
+
+/// The bands of an image `width × height`: rows per band (each band's rays
+/// in one storage binding), the band count, and the buffers: the rays of a
+/// band, and the bands' `[first row, rows, 0, 0]` at `stride` bytes apart.
+fn band_buffers(
+    device: &wgpu::Device,
+    width: u32,
+    height: u32,
+    band_bytes: u64,
+) -> (u32, u32, wgpu::Buffer, wgpu::Buffer, u32) {
+    let limits = device.limits();
+    let ray = std::mem::size_of::<GpuRay>() as u64;
+    let bytes = band_bytes
+        .min(limits.max_storage_buffer_binding_size)
+        .min(limits.max_buffer_size);
+    let rows = (bytes / (ray * width as u64)).clamp(1, height as u64) as u32;
+    let count = height.div_ceil(rows);
+    let rays = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("rays"),
+        size: width as u64 * rows as u64 * ray,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let stride = limits.min_uniform_buffer_offset_alignment.max(16);
+    let mut table = vec![0u32; (count * stride / 4) as usize];
+    for b in 0..count {
+        let at = (b * stride / 4) as usize;
+        table[at] = b * rows;
+        table[at + 1] = rows;
+    }
+    let bands = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("bands"),
+        contents: bytemuck::cast_slice(&table),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    (rows, count, rays, bands, stride)
+}
+
 fn output_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some("linear image"),
@@ -169,6 +222,12 @@ fn output_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Textu
 impl Tracer {
     /// Compiles the shader and uploads `scene`.
     pub fn new(gpu: &Gpu, scene: &SceneBuffers) -> Tracer {
+        Tracer::with_band_bytes(gpu, scene, BAND_BYTES)
+    }
+
+    /// [`Tracer::new`], tracing the image in bands whose rays take at most
+    /// `band_bytes` (at least one row a band; the tests cut small frames).
+    pub fn with_band_bytes(gpu: &Gpu, scene: &SceneBuffers, band_bytes: u64) -> Tracer {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
@@ -185,6 +244,26 @@ impl Tracer {
             count: None,
         }];
         entries.extend((1..=4).chain(7..=10).map(storage_entry));
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 11,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 12,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(16),
+            },
+            count: None,
+        });
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 5,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -243,6 +322,8 @@ impl Tracer {
         });
         let (width, height) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
         let output = output_texture(device, width, height);
+        let (band_rows, band_count, rays, bands, band_stride) =
+            band_buffers(device, width, height, band_bytes);
         let hotspots = storage_buffer(device, "hot spots", bytemuck::cast_slice(&scene.hotspots));
         let objects = storage_buffer(device, "objects", bytemuck::cast_slice(&scene.objects));
         let nodes = storage_buffer(device, "nodes", bytemuck::cast_slice(&scene.nodes));
@@ -256,7 +337,9 @@ impl Tracer {
             &layout,
             [
                 &params, &hotspots, &objects, &nodes, &profile, &cells, &near, &stars, &air_table,
+                &rays,
             ],
+            &bands,
             &sky,
             &output,
         );
@@ -272,22 +355,30 @@ impl Tracer {
             near,
             stars,
             air_table,
+            rays,
+            bands,
+            band_stride,
+            band_count,
+            band_rows,
+            band_bytes,
             sky,
             output,
             bind_group,
             width,
             height,
+            passes: passes(&scene.params),
         };
         tracer.write_sky(gpu, scene);
         tracer
     }
 
     /// The bind group: `buffers` are the uniform block, then the storage
-    /// buffers at bindings 1–4 and 7–10.
+    /// buffers at bindings 1–4 and 7–11; `bands` one band's row at binding 12.
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
-        buffers: [&wgpu::Buffer; 9],
+        buffers: [&wgpu::Buffer; 10],
+        bands: &wgpu::Buffer,
         sky: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> wgpu::BindGroup {
@@ -295,12 +386,20 @@ impl Tracer {
         let out_view = output.create_view(&Default::default());
         let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
             .iter()
-            .zip([0, 1, 2, 3, 4, 7, 8, 9, 10])
+            .zip([0, 1, 2, 3, 4, 7, 8, 9, 10, 11])
             .map(|(b, binding)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
             })
             .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 12,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: bands,
+                offset: 0,
+                size: wgpu::BufferSize::new(16),
+            }),
+        });
         entries.push(wgpu::BindGroupEntry {
             binding: 5,
             resource: wgpu::BindingResource::TextureView(&sky_view),
@@ -375,8 +474,16 @@ impl Tracer {
             bytemuck::cast_slice(&scene.air_table),
         );
         let (w, h) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
+        self.passes = passes(&scene.params);
         if (w, h) != (self.width, self.height) {
             self.output = output_texture(device, w, h);
+            (
+                self.band_rows,
+                self.band_count,
+                self.rays,
+                self.bands,
+                self.band_stride,
+            ) = band_buffers(device, w, h, self.band_bytes);
             self.width = w;
             self.height = h;
             rebind = true;
@@ -395,7 +502,9 @@ impl Tracer {
                     &self.near,
                     &self.stars,
                     &self.air_table,
+                    &self.rays,
                 ],
+                &self.bands,
                 &self.sky,
                 &self.output,
             );
@@ -403,24 +512,44 @@ impl Tracer {
     }
 
     /// Uploads only the uniform block (camera moves, toggles).
-    pub fn update_params(&self, gpu: &Gpu, scene: &SceneBuffers) {
+    pub fn update_params(&mut self, gpu: &Gpu, scene: &SceneBuffers) {
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&scene.params));
+        self.passes = passes(&scene.params);
     }
 
-    /// Records the tracing dispatch.
+    /// Records the tracing of a frame, band by band (one band unless the
+    /// image's rays outgrow one storage binding): the band's rays cleared,
+    /// then its passes (see [`super::pack`](mod@super::pack)), one dispatch
+    /// each; wgpu puts a barrier between dispatches that write the same
+    /// storage buffer.
     pub fn dispatch(&self, encoder: &mut wgpu::CommandEncoder) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("trace"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(
-            self.width.div_ceil(WORKGROUP),
-            self.height.div_ceil(WORKGROUP),
-            1,
-        );
+        for b in 0..self.band_count {
+            encoder.clear_buffer(&self.rays, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("trace"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[b * self.band_stride]);
+            for _ in 0..self.passes {
+                pass.dispatch_workgroups(
+                    self.width.div_ceil(WORKGROUP),
+                    self.band_rows.div_ceil(WORKGROUP),
+                    1,
+                );
+            }
+        }
+    }
+
+    /// Passes a band of a frame takes.
+    pub fn passes(&self) -> u32 {
+        self.passes
+    }
+
+    /// The bands a frame is traced in.
+    pub fn bands(&self) -> u32 {
+        self.band_count
     }
 
     /// The linear image (what the display pass and read-back use).

@@ -33,6 +33,13 @@ pub const MEDIUM_LOGISTIC: u32 = 0;
 /// [`Params::medium`]`[0]`: real air (the `air_table` buffer; see
 /// `real_air`).
 pub const MEDIUM_AIR: u32 = 1;
+/// [`GpuRay::count`]`[0]`: the pixel's next sample starts from the camera (a
+/// cleared buffer says this).
+pub const PHASE_START: u32 = 0;
+/// [`GpuRay::count`]`[0]`: a sample's ray is on its way.
+pub const PHASE_TRACING: u32 = 1;
+/// [`GpuRay::count`]`[0]`: every sample is done and the pixel written.
+pub const PHASE_DONE: u32 = 2;
 
 /// One instruction of an SDF program (96 bytes, vec4-aligned).
 #[repr(C)]
@@ -139,6 +146,29 @@ pub struct Params {
     pub air_range: [f32; 4],
     /// Real air's formula grid: `[T₀, ΔT, P₀, ΔP]`.
     pub air_grid: [f32; 4],
+    /// `[march iterations of one sample at most, iterations per pass, 0, 0]`
+    /// (see [`super::pack`](mod@super::pack)).
+    pub march: [u32; 4],
+}
+
+/// A pixel's ray between the passes of a frame (`Ray` in the shader; the
+/// shader alone reads and writes them, the host only clears them to
+/// [`PHASE_START`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRay {
+    /// The current RK4 step's start: position; `w`: arc length.
+    pub x: [f32; 4],
+    /// Its ray vector v = n·t; `w`: δ.
+    pub v: [f32; 4],
+    /// Its dv/dτ; `w`: the step's τ length (0: no step yet).
+    pub a: [f32; 4],
+    /// `[θ on the step, arc per unit θ, distance budget, free flight]`.
+    pub at: [f32; 4],
+    /// The radiance of the pixel's finished samples.
+    pub sum: [f32; 4],
+    /// `[phase (`PHASE_*`), sample, distance queries, march iterations]`.
+    pub count: [u32; 4],
 }
 
 /// One cell of the distance grid ([`crate::render::accel::Grid`]).

@@ -4,8 +4,10 @@
 //!
 //! Data flow: a scene or problem file ([`Input`]) → [`pack::pack`] (f32
 //! buffers laid out as in [`layout`], the objects compiled by [`program`], the
-//! medium in δ form) → [`gpu::Tracer`] (one compute
-//! dispatch per frame into a linear HDR image) → either read back and written
+//! medium in δ form) → [`gpu::Tracer`] (a frame traced into a linear HDR
+//! image by a few dozen compute dispatches, each of which marches every
+//! pixel's ray on by a bounded number of iterations; see [`pack`]'s "Passes")
+//! → either read back and written
 //! like `mirage render`'s PNG (headless), or tone-mapped on the GPU and drawn
 //! under the egui panels ([`window`]).
 //!

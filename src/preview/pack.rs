@@ -10,6 +10,20 @@
 //! Everything is f32, and the medium stays in δ form: the amplitudes are the
 //! compiled `C·|k_s|·n/S` (≈ 1e-5), which f32 keeps to 7 digits, whereas
 //! `1 + δ` would keep three.
+//!
+//! # Passes
+//!
+//! The shader traces a frame in passes of at most [`PASS_ITERATIONS`]
+//! iterations of its march a pixel (see `trace.wgsl`): Mesa's software
+//! Vulkan (llvmpipe) silently breaks out of every loop once an invocation
+//! group has run 65535 loop iterations in all, inner loops included, and one
+//! march iteration of real air runs about 85 of them (the profile's binary
+//! searches, the hot-spot and formula loops, the ground-crossing searches), so
+//! a frame traced in one pass gave up every ray longer than about 800 RK4
+//! steps and drew it as sky. Each iteration of the march ends an RK4 step or
+//! spends one distance query's budget, so a sample takes at most
+//! [`march_iterations`] of them, and a frame at most [`passes`] passes; the
+//! later ones find most pixels done and return at once.
 
 use super::layout::{
     BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, GpuCell, GpuHotSpot, GpuObject,
@@ -40,6 +54,11 @@ pub const SKY_HEIGHT: u32 = 1025;
 pub const MAX_QUERIES: u32 = crate::render::march::MAX_QUERIES;
 /// Scenes with more objects than this are queried through the distance grid.
 pub const GRID_MIN_OBJECTS: usize = 8;
+/// March iterations a pass advances a pixel's ray by at most: 128 iterations
+/// of about 85 loop iterations each, plus one shading (a shadow ray of up to
+/// 512 distance queries), stay below llvmpipe's 65535 for the bundled scenes
+/// (see the module documentation).
+pub const PASS_ITERATIONS: u32 = 128;
 
 /// Everything the shader reads, ready to upload.
 #[derive(Clone, Debug)]
@@ -223,6 +242,8 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
     if buffers.near.is_empty() {
         buffers.near.push(0);
     }
+    // (Before set_air, which bounds the march by it.)
+    buffers.params.up[3] = scene.max_distance as f32;
     buffers.set_air(medium, &air);
     buffers.set_view(view);
     let p = &mut buffers.params;
@@ -267,7 +288,6 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
             buffers.stars = star_cells();
         }
     }
-    p.up[3] = scene.max_distance as f32;
     p.counts = [SKY_WIDTH, SKY_HEIGHT, view.samples_per_pixel, MAX_QUERIES];
     if buffers.objects.is_empty() {
         buffers.objects.push(GpuObject::default());
@@ -276,6 +296,26 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
         buffers.nodes.push(Node::default());
     }
     Ok(buffers)
+}
+
+/// The most iterations one sample's march can take: one per RK4 step, of
+/// which a ray takes at most `max_distance / (step / n_ratio)` (a step of
+/// `step` metres, as the shader takes them, covers at least `step / n_ratio`
+/// of arc, `n_ratio` bounding n_max / n_min), one per distance query (at most
+/// [`MAX_QUERIES`]), and the switch to free flight; with a margin for f32's
+/// rounding of the arc length.
+pub fn march_iterations(step: f64, n_ratio: f64, max_distance: f64) -> u32 {
+    let steps = (1.01 * max_distance * n_ratio / step).ceil() + 2.0;
+    (steps + MAX_QUERIES as f64 + 8.0).min(u32::MAX as f64 / 2.0) as u32
+}
+
+/// The passes that trace a frame of `params` (see the module documentation):
+/// a sample ends in the pass after its last full one at the latest, and the
+/// next starts in the pass after that.
+pub fn passes(params: &Params) -> u32 {
+    let [per_sample, per_pass, _, _] = params.march;
+    let samples = params.counts[2].max(1);
+    samples.saturating_mul(per_sample.div_ceil(per_pass.max(1)) + 1)
 }
 
 impl SceneBuffers {
@@ -300,8 +340,9 @@ impl SceneBuffers {
         p.stars[0] = star_radius(c.pixel_angle()) as f32;
     }
 
-    /// Sets the medium and what follows from it (the air's analysis): `air`
-    /// is `medium` analysed ([`Air::new`]).
+    /// Sets the medium and what follows from it (the air's analysis, the
+    /// bound of the march at the largest distance already in
+    /// `params.up[3]`): `air` is `medium` analysed ([`Air::new`]).
     pub fn set_air(&mut self, medium: &Medium, air: &Air) {
         let p = &mut self.params;
         // Real air: its tables, and its hot spots' coefficients in kelvins.
@@ -328,6 +369,22 @@ impl SceneBuffers {
             None => [0.0; 4],
         };
         let (inside, outside) = air.steps();
+        // δ is positive in real air; the logistic terms lower it at most by
+        // their negative amplitudes.
+        let delta_min = if real.is_some() {
+            0.0
+        } else {
+            raw.background.map_or(0.0, |[amp, _]| amp.min(0.0))
+                + raw.inversion.map_or(0.0, |[amp, _, _]| amp.min(0.0))
+                + raw.hotspots.iter().map(|h| h[0].min(0.0)).sum::<f64>()
+        };
+        let step = inside.min(outside).min(p.up[3] as f64);
+        p.march = [
+            march_iterations(step, air.n_max() / (1.0 + delta_min), p.up[3] as f64),
+            PASS_ITERATIONS,
+            0,
+            0,
+        ];
         p.air = [
             air.n_max() as f32,
             finite_or_big(inside) as f32,
@@ -383,6 +440,24 @@ impl SceneBuffers {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_frame_has_the_passes_of_its_longest_rays() {
+        // 30 km at a 5 m step: 6000 RK4 steps (a percent more for f32's arc
+        // length) and the 2000 distance queries.
+        let n = march_iterations(5.0, 1.0003, 30_000.0);
+        assert!((6002 + MAX_QUERIES..6100 + MAX_QUERIES).contains(&n), "{n}");
+        let mut p = Params::default();
+        p.march = [n, PASS_ITERATIONS, 0, 0];
+        p.counts[2] = 2;
+        // Each sample's iterations in full passes, and the pass it ends in.
+        assert_eq!(passes(&p), 2 * (n.div_ceil(PASS_ITERATIONS) + 1));
+        // Straight rays: one step to the largest distance.
+        assert_eq!(
+            march_iterations(30_000.0, 1.0, 30_000.0),
+            4 + MAX_QUERIES + 8
+        );
+    }
 
     #[test]
     fn the_sky_table_has_the_horizon_row() {

@@ -9,8 +9,8 @@
 //! the Rust `#[repr(C)]` structs of [`super::layout`].
 
 use super::layout::{
-    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, MEDIUM_AIR, MEDIUM_LOGISTIC, SHADING_ALBEDO,
-    SHADING_LIT,
+    BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, MEDIUM_AIR, MEDIUM_LOGISTIC, PHASE_DONE,
+    PHASE_START, PHASE_TRACING, SHADING_ALBEDO, SHADING_LIT,
 };
 use super::program::{Op, STACK_DEPTH};
 use crate::render::sky::{STAR_CELLS, STAR_MARGIN_MAX};
@@ -55,6 +55,9 @@ pub fn constants() -> Vec<Constant> {
         U32("GROUND_CHECKER", GROUND_CHECKER),
         U32("MEDIUM_LOGISTIC", MEDIUM_LOGISTIC),
         U32("MEDIUM_AIR", MEDIUM_AIR),
+        U32("PHASE_START", PHASE_START),
+        U32("PHASE_TRACING", PHASE_TRACING),
+        U32("PHASE_DONE", PHASE_DONE),
         F32("BIG", BIG),
         F32("STAR_CELLS", STAR_CELLS as f32),
         F32("STAR_MARGIN_MAX", STAR_MARGIN_MAX as f32),
@@ -95,7 +98,7 @@ pub fn trace_shader() -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::layout::{GpuCell, GpuHotSpot, GpuObject, Node, Params};
+    use super::super::layout::{GpuCell, GpuHotSpot, GpuObject, GpuRay, Node, Params};
     use super::*;
     use naga::{AddressSpace, ArraySize, Module, TypeInner};
     use std::mem::{offset_of, size_of};
@@ -216,6 +219,20 @@ mod tests {
                 medium,
                 air_range,
                 air_grid,
+                march,
+            }),
+        );
+        check_struct(
+            &module,
+            "Ray",
+            size_of::<GpuRay>(),
+            &fields!(GpuRay {
+                x,
+                v,
+                a,
+                at,
+                sum,
+                count
             }),
         );
         check_struct(
@@ -256,7 +273,8 @@ mod tests {
     #[test]
     fn the_bindings_hold_the_rust_elements() {
         let module = validate("trace shader", &trace_shader());
-        // Binding → the size of one element of what SceneBuffers uploads there.
+        // Binding → the size of one element of what SceneBuffers uploads
+        // there (11: the tracer's own ray states).
         let storage = [
             (1, size_of::<GpuHotSpot>()),
             (2, size_of::<GpuObject>()),
@@ -266,6 +284,7 @@ mod tests {
             (8, size_of::<u32>()),
             (9, size_of::<[f32; 4]>()),
             (10, size_of::<[f32; 4]>()),
+            (11, size_of::<GpuRay>()),
         ];
         let mut seen = 0;
         for (_, var) in module.global_variables.iter() {
@@ -273,6 +292,17 @@ mod tests {
             assert_eq!(rb.group, 0);
             let inner = &module.types[var.ty].inner;
             match var.space {
+                AddressSpace::Uniform if rb.binding == 12 => {
+                    // The band: [first row, rows, 0, 0] (gpu.rs writes u32s).
+                    assert_eq!(
+                        inner,
+                        &TypeInner::Vector {
+                            size: naga::VectorSize::Quad,
+                            scalar: naga::Scalar::U32
+                        }
+                    );
+                    seen += 1;
+                }
                 AddressSpace::Uniform => {
                     assert_eq!(rb.binding, 0);
                     let TypeInner::Struct { span, .. } = inner else {
@@ -300,6 +330,6 @@ mod tests {
                 _ => {}
             }
         }
-        assert_eq!(seen, 1 + storage.len());
+        assert_eq!(seen, 2 + storage.len());
     }
 }

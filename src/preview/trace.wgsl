@@ -1,12 +1,23 @@
 // The previewer's ray tracer: the CPU renderer's algorithm (src/render/march.rs,
 // air.rs, mod.rs) in f32. One invocation per pixel writes linear RGB.
 //
+// A frame is traced in passes (dispatches): each pass advances every pixel's
+// ray by at most P.march.y iterations of the march and keeps where it got to
+// in `rays`, and the pass in which a pixel's last sample ends writes its
+// colour. Mesa's software Vulkan (llvmpipe) breaks out of every loop once an
+// invocation group has run 65535 loop iterations in all (its
+// LP_MAX_TGSI_LOOP_ITERATIONS, one counter shared by every loop of the
+// shader, inner loops included), silently: a ray that needs more (about 800
+// RK4 steps of real air, a few thousand of the logistic model: 30 km at a 5 m
+// step) was given up half-way and drawn as sky. Short passes stay far below that on any device, and keep each
+// dispatch short on real GPUs.
+//
 // The medium is evaluated in δ form (δ ≈ 1e-5 keeps 7 digits; 1 + δ would keep
 // three): dv/dτ = ∇δ + δ∇δ, and Snell's invariant is carried as c − 1, computed
 // from δ and the elevation, never as |v_h| − 1.
 //
 // The constants shared with the Rust side (OP_*, STACK_DEPTH, WORKGROUP,
-// SHADING_*, GROUND_*, MEDIUM_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
+// SHADING_*, GROUND_*, MEDIUM_*, PHASE_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
 // that src/preview/shader.rs generates and puts before this file.
 
 struct Params {
@@ -39,6 +50,7 @@ struct Params {
     medium: vec4<u32>,
     air_range: vec4<f32>,
     air_grid: vec4<f32>,
+    march: vec4<u32>,
 }
 struct Cell { empty: f32, far: f32, start: u32, len: u32 }
 
@@ -57,9 +69,12 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 @group(0) @binding(8) var<storage, read> near: array<u32>;
 @group(0) @binding(9) var<storage, read> stars: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> air_table: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> rays: array<Ray>;
+// The band of rows a dispatch traces: [first row, rows, 0, 0] (a frame too
+// large for one buffer of rays is traced band by band).
+@group(0) @binding(12) var<uniform> band: vec4<u32>;
 
 const PI: f32 = 3.14159265358979;
-const MAX_ITERATIONS: u32 = 20000u;
 
 // ---------------------------------------------------------------- the medium
 
@@ -631,37 +646,103 @@ fn tolerance(s: f32, p: vec3<f32>) -> f32 {
     return max(max(P.tolerance.x, P.tolerance.y * s), F32_FLOOR * size);
 }
 
-fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
-    let n_max = P.air.x * (1.0 + 1e-7);
+// A pixel's ray between passes: where its march got to, and its samples so
+// far (layout::GpuRay). The current RK4 step is kept by its start (x, v, a,
+// s, δ and its τ length h; h = 0: no step yet, the next one starts there),
+// and `march` takes it again from there at its one RK4 call site, so that a
+// ray resumed in a later pass takes bit for bit the steps of one traced in a
+// single pass.
+struct Ray {
+    x: vec4<f32>,       // position, arc length s
+    v: vec4<f32>,       // v = n·t, δ
+    a: vec4<f32>,       // dv/dτ, the step's τ length h
+    at: vec4<f32>,      // θ on the step, arc per unit θ, budget, free flight (1) or not (0)
+    sum: vec4<f32>,     // the pixel's finished samples' radiance
+    count: vec4<u32>,   // phase (PHASE_*), sample, distance queries, iterations
+}
+
+// A camera ray from `origin` along the unit `dir`, before its first step.
+fn start_ray(origin: vec3<f32>, dir: vec3<f32>) -> Ray {
     let m0 = medium(origin);
     let v0 = dir * (1.0 + m0.w);
-    var seg = Seg(origin, v0, rate_dv(m0), 0.0, m0.w, origin, v0, rate_dv(m0), 0.0, m0.w, 0.0);
-    var theta = 1.0;
-    var arc_per_theta = 0.0;
-    var ground_theta = -1.0;
-    var free = P.size.w == 0u;
-    var queries = 0u;
-    var budget = 0.0;
+    var free = 0.0;
+    if (P.size.w == 0u) { free = 1.0; }
+    return Ray(vec4<f32>(origin, 0.0), vec4<f32>(v0, m0.w), vec4<f32>(rate_dv(m0), 0.0),
+        vec4<f32>(1.0, 0.0, 0.0, free), vec4<f32>(0.0), vec4<u32>(PHASE_TRACING, 0u, 0u, 0u));
+}
+
+// `march`'s result: the ray as it stands, and its outcome once `done`.
+struct Marched { done: bool, ray: Ray, outcome: Outcome }
+
+// Marches `r` on by at most P.march.y iterations (one pass). Each iteration
+// ends an RK4 step or spends the budget of one distance query, so a ray
+// takes at most P.march.x of them; past that (only a ray whose state went
+// non-finite) it is given up to the sky along its direction.
+fn march(r: Ray) -> Marched {
+    var ray = r;
+    let n_max = P.air.x * (1.0 + 1e-7);
     let max_distance = P.up.w;
-    for (var it = 0u; it < MAX_ITERATIONS; it++) {
-        if (!free && budget <= 0.0) {
-            var p = seg.x1;
-            var v = seg.v1;
-            if (seg.h > 0.0) {
-                let e = hermite(seg, theta);
-                p = e[0];
-                v = e[1] / seg.h;
+    var seg = Seg(r.x.xyz, r.v.xyz, r.a.xyz, r.x.w, r.v.w, r.x.xyz, r.v.xyz, r.a.xyz, r.x.w, r.v.w, 0.0);
+    // Resuming inside a step: take it again from its start.
+    var resume = r.a.w > 0.0;
+    var theta = r.at.x;
+    var arc_per_theta = r.at.y;
+    var budget = r.at.z;
+    var free = r.at.w > 0.5;
+    var queries = r.count.z;
+    var iterations = r.count.w;
+    var ground_theta = -1.0;
+    for (var pass_iteration = 0u; pass_iteration <= P.march.y; pass_iteration++) {
+        if (pass_iteration == P.march.y) {
+            // The pass is over: keep the current step by its start.
+            if (theta >= 1.0) {
+                ray.x = vec4<f32>(seg.x1, seg.s1);
+                ray.v = vec4<f32>(seg.v1, seg.d1);
+                ray.a = vec4<f32>(seg.a1, 0.0);
+                theta = 1.0;
+            } else {
+                ray.x = vec4<f32>(seg.x0, seg.s0);
+                ray.v = vec4<f32>(seg.v0, seg.d0);
+                ray.a = vec4<f32>(seg.a0, seg.h);
             }
+            ray.at = vec4<f32>(theta, arc_per_theta, budget, select(0.0, 1.0, free));
+            ray.count.z = queries;
+            ray.count.w = iterations;
+            break;
+        }
+        if (iterations >= P.march.x) {
+            return Marched(true, ray, Outcome(0u, 0u, seg.x1, normalize(seg.v1), max_distance));
+        }
+        iterations += 1u;
+        if (theta >= 1.0 || resume) {
+            var h_arc = min(step_at(seg.x1), max_distance);
+            var h = h_arc / n_max;
+            if (resume) {
+                h = r.a.w;
+                h_arc = arc_per_theta;
+            } else {
+                theta = 0.0;
+            }
+            seg = rk4(seg.x1, seg.v1, seg.a1, seg.s1, seg.d1, h);
+            arc_per_theta = h_arc;
+            resume = false;
+            ground_theta = -1.0;
+            if (P.flags.z != GROUND_NONE) { ground_theta = ground_crossing(seg); }
+        }
+        if (!free && budget <= 0.0) {
+            let e = hermite(seg, theta);
+            let p = e[0];
+            let v = e[1] / seg.h;
             let q = scene_distance(p);
             queries += 1u;
             let arc = seg.s0 + theta * (seg.s1 - seg.s0);
             if (q.x < tolerance(arc, p) || queries >= P.counts.w) {
                 var index = q.y;
                 if (index < 0.0) { index = all_objects_distance(p).y; }
-                return Outcome(1u, u32(index), p, normalize(v), arc);
+                return Marched(true, ray, Outcome(1u, u32(index), p, normalize(v), arc));
             }
             let f = fate(p, v, true);
-            if (f.kind == 1u) { return Outcome(0u, 0u, p, f.dir, arc); }
+            if (f.kind == 1u) { return Marched(true, ray, Outcome(0u, 0u, p, f.dir, arc)); }
             if (f.kind == 2u) {
                 free = true;
                 continue;
@@ -669,14 +750,6 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
             budget = q.x;
         }
         // Advance by at most `budget` of arc (unlimited when free).
-        if (theta >= 1.0) {
-            let h_arc = min(step_at(seg.x1), max_distance);
-            seg = rk4(seg.x1, seg.v1, seg.a1, seg.s1, seg.d1, h_arc / n_max);
-            theta = 0.0;
-            arc_per_theta = h_arc;
-            ground_theta = -1.0;
-            if (P.flags.z != GROUND_NONE) { ground_theta = ground_crossing(seg); }
-        }
         let room = (1.0 - theta) * arc_per_theta;
         var go = room;
         if (!free) { go = min(budget, room); }
@@ -686,7 +759,7 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
             let e = hermite(seg, ground_theta);
             let point = vec3<f32>(e[0].x, 0.0, e[0].z);
             let s = seg.s0 + ground_theta * (seg.s1 - seg.s0);
-            return Outcome(2u, 0u, point, normalize(hermite_v(seg, ground_theta)), s);
+            return Marched(true, ray, Outcome(2u, 0u, point, normalize(hermite_v(seg, ground_theta)), s));
         }
         if (seg.s1 >= max_distance) {
             let t_max = clamp((max_distance - seg.s0) / (seg.s1 - seg.s0), 0.0, 1.0);
@@ -696,13 +769,13 @@ fn march(origin: vec3<f32>, dir: vec3<f32>) -> Outcome {
                 let f = fate(e[0], v, false);
                 var dir = normalize(v);
                 if (f.kind == 1u) { dir = f.dir; }
-                return Outcome(0u, 0u, e[0], dir, max_distance);
+                return Marched(true, ray, Outcome(0u, 0u, e[0], dir, max_distance));
             }
         }
         theta = goal;
         budget -= go;
     }
-    return Outcome(0u, 0u, seg.x1, normalize(seg.v1), max_distance);
+    return Marched(false, ray, Outcome(0u, 0u, vec3<f32>(0.0), vec3<f32>(0.0), 0.0));
 }
 
 // ------------------------------------------------------------------ shading
@@ -783,21 +856,51 @@ fn sample_offset(i: u32) -> vec2<f32> {
     return vec2<f32>(fract(0.5 + 0.7548776662466927 * k), fract(0.5 + 0.5698402909980533 * k));
 }
 
+fn camera_ray(id: vec2<u32>, sample: u32) -> Ray {
+    let off = sample_offset(sample);
+    let px = f32(id.x) + off.x;
+    let py = f32(id.y) + off.y;
+    let sx = (2.0 * px / f32(P.size.x) - 1.0) * P.origin.w * P.forward.w;
+    let sy = (1.0 - 2.0 * py / f32(P.size.y)) * P.origin.w;
+    let dir = normalize(P.forward.xyz + P.right.xyz * sx + P.up.xyz * sy);
+    return start_ray(P.origin.xyz, dir);
+}
+
+// One pass over a band of the image: each pixel's ray marches on from where
+// the last pass left it (the host clears `rays` to PHASE_START before a
+// band's first pass); a sample that ends is shaded, and the pixel's last one
+// writes its colour. At most one sample ends in a pass, so that a pass shades
+// at most once.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(global_invocation_id) local: vec3<u32>) {
     let w = P.size.x;
-    let hgt = P.size.y;
-    if (id.x >= w || id.y >= hgt) { return; }
-    var sum = vec3<f32>(0.0);
+    let id = vec2<u32>(local.x, local.y + band.x);
+    if (local.x >= w || local.y >= band.y || id.y >= P.size.y) { return; }
+    let i = local.x + w * local.y;
+    let phase = rays[i].count.x;
+    if (phase == PHASE_DONE) { return; }
+    var ray = rays[i];
+    if (phase == PHASE_START) {
+        let sum = ray.sum;
+        let sample = ray.count.y;
+        ray = camera_ray(id.xy, sample);
+        ray.sum = sum;
+        ray.count.y = sample;
+    }
+    let m = march(ray);
+    ray = m.ray;
+    if (!m.done) {
+        rays[i] = ray;
+        return;
+    }
+    let sum = ray.sum.xyz + shade(m.outcome);
+    let sample = ray.count.y + 1u;
     let spp = P.counts.z;
-    for (var i = 0u; i < spp; i++) {
-        let off = sample_offset(i);
-        let px = f32(id.x) + off.x;
-        let py = f32(id.y) + off.y;
-        let sx = (2.0 * px / f32(w) - 1.0) * P.origin.w * P.forward.w;
-        let sy = (1.0 - 2.0 * py / f32(hgt)) * P.origin.w;
-        let dir = normalize(P.forward.xyz + P.right.xyz * sx + P.up.xyz * sy);
-        sum += shade(march(P.origin.xyz, dir));
+    if (sample < spp) {
+        rays[i].sum = vec4<f32>(sum, 0.0);
+        rays[i].count = vec4<u32>(PHASE_START, sample, 0u, 0u);
+        return;
     }
     textureStore(out_image, vec2<i32>(i32(id.x), i32(id.y)), vec4<f32>(sum / f32(spp), 1.0));
+    rays[i].count.x = PHASE_DONE;
 }
