@@ -447,8 +447,10 @@ mod tests {
         // length) and the 2000 distance queries.
         let n = march_iterations(5.0, 1.0003, 30_000.0);
         assert!((6002 + MAX_QUERIES..6100 + MAX_QUERIES).contains(&n), "{n}");
-        let mut p = Params::default();
-        p.march = [n, PASS_ITERATIONS, 0, 0];
+        let mut p = Params {
+            march: [n, PASS_ITERATIONS, 0, 0],
+            ..Default::default()
+        };
         p.counts[2] = 2;
         // Each sample's iterations in full passes, and the pass it ends in.
         assert_eq!(passes(&p), 2 * (n.div_ceil(PASS_ITERATIONS) + 1));
