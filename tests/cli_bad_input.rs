@@ -667,3 +667,56 @@ fn a_round_earth_that_is_not_one() {
     );
     rejects(&below, &["pairs[0].origin", "below the ground", "sphere"]);
 }
+
+#[test]
+fn a_scene_over_a_round_earth_that_is_not_one() {
+    let scene = |earth: &str| {
+        format!(
+            r#"{{ "camera": {{ "position": [0, 2, 0], "look_at": [0, 2, 100], "vertical_fov": 10, "width": 16, "height": 9 }},
+                 "medium": {{ "scale": 1.0, "background": {{ "n": 1.0, "a": 40.0 }} }},
+                 "ground": {{ "albedo": [0.2, 0.3, 0.4] }},
+                 "earth": {earth} }}"#
+        )
+    };
+    let render = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("scene.json");
+        std::fs::write(&input, text).unwrap();
+        let output = dir.path().join("out.png");
+        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+            .arg("render")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        (run.status.code(), stderr, input, output.exists())
+    };
+    // The good scene over the earth renders.
+    let (code, stderr, _, written) = render(&scene(r#"{"radius": 6371000.0}"#));
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(written);
+    for (earth, expected) in [
+        (r#"{"radius": 0.0}"#, &["earth.radius", "positive"][..]),
+        (r#"{"radius": 500.0}"#, &["earth.radius", "at least 1000 m"]),
+        (r#"{"radius": "big"}"#, &["earth.radius", "invalid type"]),
+        (
+            r#"{"radius": 6371000.0, "centre": [0, 0, 0]}"#,
+            &["earth", "unknown field `centre`"],
+        ),
+        ("{}", &["earth", "missing field `radius`"]),
+        ("6371000.0", &["earth", "invalid type"]),
+    ] {
+        let (code, stderr, input, written) = render(&scene(earth));
+        assert_eq!(code, Some(2), "{earth}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(stderr.contains(&input.display().to_string()), "{stderr}");
+        for e in expected {
+            assert!(stderr.contains(e), "{e:?} missing from: {stderr}");
+        }
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(!written, "{earth}: an image was written");
+    }
+}

@@ -8,6 +8,7 @@ use mirage::render::accel::{Aabb, Grid, SceneDistance};
 use mirage::render::air::Air;
 use mirage::render::march::{HitTolerance, MarchStats, Marcher, Outcome};
 use mirage::scene::sdf::{SceneObject, sphere_trace};
+use mirage::trace::Earth;
 
 fn objects() -> Vec<SceneObject> {
     serde_json::from_str(
@@ -66,11 +67,18 @@ fn zero_delta_curved_tracing_matches_straight_sphere_tracing() {
     let bx = Aabb::of_objects(&objs);
     // δ ≡ 0 two ways: no air at all (one straight step), and air whose scale is
     // 0 (δ ≡ 0 but integrated with 2 m RK4 steps, several per query).
-    let vacuum = Air::new(&LogisticMedium::vacuum().into(), false, 2.0, false, bx);
+    let vacuum = Air::new(
+        &LogisticMedium::vacuum().into(),
+        false,
+        2.0,
+        false,
+        bx,
+        Earth::Flat,
+    );
     let zero: LogisticMedium =
         serde_json::from_str(r#"{"scale": 0.0, "background": {"n": 1.0, "a": 50.0}}"#).unwrap();
     zero.validate().unwrap();
-    let zero_air = Air::new(&zero.clone().into(), false, 2.0, false, bx);
+    let zero_air = Air::new(&zero.clone().into(), false, 2.0, false, bx, Earth::Flat);
     assert!(vacuum.is_straight() && !zero_air.is_straight());
 
     let mut hits = 0;
@@ -123,7 +131,14 @@ fn enhanced_and_quadric_tracers_find_the_same_hits() {
     let direct = SceneDistance::Direct(objs.clone());
     let grid = SceneDistance::Grid(Box::new(Grid::build(&objs, f64::NEG_INFINITY).unwrap()));
     let bx = Aabb::of_objects(&objs);
-    let air = Air::new(&LogisticMedium::vacuum().into(), true, 2.0, false, bx);
+    let air = Air::new(
+        &LogisticMedium::vacuum().into(),
+        true,
+        2.0,
+        false,
+        bx,
+        Earth::Flat,
+    );
     let plain = marcher(&air, &direct, 1.0);
     let enhanced = marcher(&air, &direct, 1.6);
     let quadric = marcher(&air, &grid, 1.6);
@@ -190,11 +205,11 @@ fn a_thin_pole_is_never_missed() {
     for (name, air) in [
         (
             "stratified air",
-            Air::new(&sea.clone().into(), false, 2.0, true, bx),
+            Air::new(&sea.clone().into(), false, 2.0, true, bx, Earth::Flat),
         ),
         (
             "straight",
-            Air::new(&sea.clone().into(), true, 2.0, true, bx),
+            Air::new(&sea.clone().into(), true, 2.0, true, bx, Earth::Flat),
         ),
     ] {
         for (tracer, distance, omega) in [

@@ -122,6 +122,7 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
                 colors: [[0.10, 0.10, 0.10], [0.16, 0.15, 0.13]],
             }),
         }),
+        earth: problem.trace.earth.spec(),
         objects: Vec::new(),
         sun: Default::default(),
         sky: None,

@@ -102,7 +102,8 @@ pub struct Params {
     pub inversion: [f32; 4],
     /// `[n_max, step inside zones, step outside, 0]`.
     pub air: [f32; 4],
-    /// Profile `[dy, margin, δ at the top, 0]`.
+    /// Profile `[dy, margin, δ at the top (M over the sphere), the earth's
+    /// radius (0: the flat ground)]`.
     pub profile: [f32; 4],
     /// `[absolute hit tolerance, relative, 0, 0]`.
     pub tolerance: [f32; 4],

@@ -4,6 +4,9 @@
 //! sun, the sky table and the physical sky's star cells, into the buffers of
 //! [`super::layout`].
 //!
+//! Over the round earth the profile is that of the modified refractivity M
+//! ([`Air::profile_tables`]) and the shader gets the radius (`profile.w`).
+//!
 //! Real air packs as tables of its uniform profile and of its formula
 //! ([`super::real_air`]), its hot spots as `[δT, 1/H, x, z, radius, edge]`.
 //!
@@ -41,6 +44,7 @@ use crate::render::sky::{Sky, SkyModel};
 use crate::render::{RenderOptions, Shading};
 use crate::scene::Scene;
 use crate::scene::description::GroundAlbedo;
+use crate::trace::Earth;
 use glam::DVec3;
 
 /// Sky table: columns over azimuth (wrapping).
@@ -171,10 +175,11 @@ pub fn star_cells() -> Vec<[f32; 4]> {
 pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers, FieldError> {
     super::input::previewable(medium)?;
     // As the CPU renderer: seen from the scene camera's altitude.
+    let c = scene.camera.position;
     let sky = SkyModel::from_spec(
         &scene.sky,
         &scene.sun,
-        scene.camera.position.y,
+        scene.earth.height(crate::math::V3::new(c.x, c.y, c.z)),
         view.camera.pixel_angle(),
     );
     let objects_box = Aabb::of_objects(&scene.objects);
@@ -184,6 +189,7 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
         scene.step,
         scene.ground.is_some(),
         objects_box,
+        scene.earth,
     );
     let (records, nodes) = compile_objects(&scene.objects)?;
     let mut buffers = SceneBuffers {
@@ -199,8 +205,8 @@ pub fn pack(scene: &Scene, medium: &Medium, view: &View) -> Result<SceneBuffers,
         air_table: Vec::new(),
     };
     // The CPU renderer's grid of unbounding spheres and near lists, cut at
-    // the ground as there.
-    let floor = if scene.ground.is_some() {
+    // the ground as there (not over the sphere, which sinks below y = 0).
+    let floor = if scene.ground.is_some() && scene.earth.is_flat() {
         0.0
     } else {
         f64::NEG_INFINITY
@@ -429,7 +435,10 @@ impl SceneBuffers {
             dy as f32,
             margin as f32,
             delta.last().copied().unwrap_or(0.0) as f32,
-            0.0,
+            match air.earth() {
+                Earth::Flat => 0.0,
+                Earth::Round { radius } => radius as f32,
+            },
         ];
         if self.profile.is_empty() {
             self.profile.push([0.0; 4]);

@@ -16,6 +16,11 @@
 // three): dv/dτ = ∇δ + δ∇δ, and Snell's invariant is carried as c − 1, computed
 // from δ and the elevation, never as |v_h| − 1.
 //
+// Over the round earth (P.profile.w = R > 0; 0: the flat ground) the medium
+// takes the height above the sphere centred at (0, −R, 0) for y, the ground is
+// the sphere, and the Snell decisions are Bouguer's over the profile of the
+// modified refractivity M (render/air.rs, "Over the round earth").
+//
 // The constants shared with the Rust side (OP_*, STACK_DEPTH, WORKGROUP,
 // SHADING_*, GROUND_*, MEDIUM_*, PHASE_*, BIG, STAR_CELLS, STAR_MARGIN_MAX) come from the prelude
 // that src/preview/shader.rs generates and puts before this file.
@@ -205,8 +210,37 @@ fn air_medium(p: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(f.y * grad_t + vec3<f32>(0.0, f.z * u.w, 0.0), f.x);
 }
 
-// (∇δ, δ) at p: real air, or the logistic model.
+// ------------------------------------------------------------ the round earth
+
+// (∇h, h) at p: the local vertical and the height above the ground; over the
+// sphere without cancellation, h = (x² + z² + y(2R + y)) / (|p − c| + R)
+// (trace/earth.rs).
+fn height_up(p: vec3<f32>) -> vec4<f32> {
+    let r = P.profile.w;
+    if (r == 0.0) { return vec4<f32>(0.0, 1.0, 0.0, p.y); }
+    let qy = p.y + r;
+    let qn = length(vec3<f32>(p.x, qy, p.z));
+    let h = (p.x * p.x + p.z * p.z + p.y * (p.y + 2.0 * r)) / (qn + r);
+    return vec4<f32>(p.x / qn, qy / qn, p.z / qn, h);
+}
+
+// p with its height for y: the frame the medium and its zones are written in.
+fn local(p: vec3<f32>) -> vec3<f32> {
+    if (P.profile.w == 0.0) { return p; }
+    return vec3<f32>(p.x, height_up(p).w, p.z);
+}
+
+// (∇δ, δ) at p over the ground: the flat medium at (x, h, z), its gradient by
+// the chain rule (trace::OnEarth).
 fn medium(p: vec3<f32>) -> vec4<f32> {
+    if (P.profile.w == 0.0) { return medium_flat(p); }
+    let hu = height_up(p);
+    let m = medium_flat(vec3<f32>(p.x, hu.w, p.z));
+    return vec4<f32>(m.x + m.y * hu.x, m.y * hu.y, m.z + m.y * hu.z, m.w);
+}
+
+// (∇δ, δ) at p over the flat ground: real air, or the logistic model.
+fn medium_flat(p: vec3<f32>) -> vec4<f32> {
     if (P.medium.x == MEDIUM_AIR) { return air_medium(p); }
     var delta = 0.0;
     var grad = vec3<f32>(0.0);
@@ -238,7 +272,8 @@ fn medium(p: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(grad, delta);
 }
 
-fn in_zone(p: vec3<f32>) -> bool {
+fn in_zone(q: vec3<f32>) -> bool {
+    let p = local(q);
     for (var j = 0u; j < P.size.z; j++) {
         let h = hotspots[j];
         if (p.y < h.b.w && length(vec2<f32>(p.x - h.a.z, p.z - h.a.w)) < h.b.z) { return true; }
@@ -247,7 +282,8 @@ fn in_zone(p: vec3<f32>) -> bool {
 }
 
 // The RK4 step (arc length) at p: Air::step_at.
-fn step_at(p: vec3<f32>) -> f32 {
+fn step_at(q: vec3<f32>) -> f32 {
+    let p = local(q);
     var inside = BIG;
     var approach = BIG;
     for (var j = 0u; j < P.size.z; j++) {
@@ -301,6 +337,7 @@ struct Fate { kind: u32, dir: vec3<f32> }
 // `objects`: whether the objects still count (not for a ray given up at the
 // largest distance, which sees the sky along its asymptote: Air::sky_direction).
 fn fate(p: vec3<f32>, v: vec3<f32>, objects: bool) -> Fate {
+    if (P.profile.w > 0.0) { return fate_round(p, v, objects); }
     var f = Fate(0u, vec3<f32>(0.0));
     if (P.flags.y == 1u || p.y < 0.0 || v.y == 0.0 || in_zone(p)) { return f; }
     let vn = normalize(v);
@@ -345,6 +382,175 @@ fn fate(p: vec3<f32>, v: vec3<f32>, objects: bool) -> Fate {
     let vy = sqrt(max((dt - c1) * (2.0 + dt + c1), 0.0));
     f.kind = 1u;
     f.dir = normalize(vec3<f32>(h.x * (1.0 + c1), vy, h.y * (1.0 + c1)));
+    return f;
+}
+
+
+// ------------------------------------------- Bouguer decisions over the sphere
+
+// Whether a ray at p (ray vector v) may meet the ball (centre c, radius r)
+// while its height stays in [low, high] (render/air.rs, may_meet_ball): the
+// ball must cut the ray's plane through the earth's centre, reach the
+// heights, and lie ahead; everything relative to p, where f32 keeps digits.
+fn may_meet_ball(p: vec3<f32>, v: vec3<f32>, c: vec3<f32>, r: f32, low: f32, high: f32) -> bool {
+    let q = vec3<f32>(p.x, p.y + P.profile.w, p.z);
+    let n = cross(q, v);
+    let nl = length(n);
+    if (!(nl > 0.0)) { return true; }
+    let normal = n / nl;
+    let rel = c - p;
+    if (abs(dot(rel, normal)) > r) { return false; }
+    let hb = height_up(c).w;
+    if (hb - r > high || hb + r < low) { return false; }
+    let ql = length(q);
+    let e1 = q / ql;
+    let e2 = cross(normal, e1);
+    let bx = ql + dot(rel, e1);
+    let by = dot(rel, e2);
+    let dp = length(vec2<f32>(bx, by));
+    if (dp <= r) { return true; }
+    let beta = atan2(by, bx);
+    let gamma = asin(r / dp);
+    return beta + gamma >= 0.0 && beta - gamma < PI;
+}
+
+// F = (1 + M)² − c² at profile node i (c1 = c − 1).
+fn bouguer_f(i: u32, c1: f32) -> f32 {
+    let m = profile[i].x;
+    return (m - c1) * (2.0 + m + c1);
+}
+
+// ∫ (c/R) dh / ((1 + h/R)·√F) over [ha, hb], F linear between fa and fb.
+fn sweep_piece(ha: f32, fa: f32, hb: f32, fb: f32, c: f32) -> f32 {
+    let r = P.profile.w;
+    let s = sqrt(fa) + sqrt(fb);
+    if (s > 0.0) { return c / r * 2.0 * (hb - ha) / s / (1.0 + 0.5 * (ha + hb) / r); }
+    return 0.0;
+}
+
+// φ swept from height h (F = f) up to the profile's top (Air::sweep_up).
+fn sweep_up(h: f32, f: f32, c1: f32) -> f32 {
+    let last = P.flags.w - 1u;
+    let i0 = min(u32(max(floor(h / P.profile.x), 0.0)) + 1u, last + 1u);
+    let stride_max = max(u32(1e-3 * P.profile.w / P.profile.x), 1u);
+    var ha = h;
+    var fa = max(f, 0.0);
+    var phi = 0.0;
+    var i = i0;
+    loop {
+        if (i > last) { break; }
+        let hb = f32(i) * P.profile.x;
+        let fb = max(bouguer_f(i, c1), 0.0);
+        phi += sweep_piece(ha, fa, hb, fb, 1.0 + c1);
+        if (i == last) { break; }
+        ha = hb;
+        fa = fb;
+        i = min(i + min(1u + (i - i0) / 32u, stride_max), last);
+    }
+    return phi;
+}
+
+// φ swept from height h (F = f) down to the turning height, and that height
+// (Air::sweep_down).
+fn sweep_down(h: f32, f: f32, c1: f32) -> vec2<f32> {
+    let last = P.flags.w - 1u;
+    var ha = h;
+    var fa = max(f, 0.0);
+    var phi = 0.0;
+    var i = min(u32(max(ceil(h / P.profile.x), 0.0)), last + 1u);
+    loop {
+        if (i == 0u) { break; }
+        i -= 1u;
+        let hb = f32(i) * P.profile.x;
+        if (hb >= ha) { continue; }
+        let fb = bouguer_f(i, c1);
+        if (fb <= 0.0) {
+            let turn = ha - (ha - hb) * fa / (fa - fb);
+            phi += sweep_piece(turn, 0.0, ha, fa, 1.0 + c1);
+            return vec2<f32>(phi, turn);
+        }
+        phi += sweep_piece(hb, fb, ha, fa, 1.0 + c1);
+        ha = hb;
+        fa = fb;
+    }
+    return vec2<f32>(phi, 0.0);
+}
+
+// Air::round_fate: Bouguer's invariant c = n·r·cos(e)/R, carried as c − 1.
+fn fate_round(p: vec3<f32>, v: vec3<f32>, objects: bool) -> Fate {
+    var f = Fate(0u, vec3<f32>(0.0));
+    let hu = height_up(p);
+    let h = hu.w;
+    let up = hu.xyz;
+    if (P.flags.y == 1u || h < 0.0 || in_zone(p)) { return f; }
+    let vn = normalize(v);
+    let se = dot(vn, up);
+    if (se == 0.0) { return f; }
+    let one_minus_cos = se * se / (1.0 + sqrt(max(1.0 - se * se, 0.0)));
+    let delta = medium_flat(vec3<f32>(p.x, h, p.z)).w;
+    let k = h / P.profile.w;
+    // c − 1 = (1 + h/R)(1 + δ)(1 − (1 − cos e)) − 1.
+    let c1 = delta + k + delta * k - (1.0 + k) * (1.0 + delta) * one_minus_cos;
+    let rising = se > 0.0;
+    let above = h >= P.profile.x * f32(P.flags.w - 1u);
+    let escape = (rising && above) || profile[profile_index_floor(h)].z - P.profile.y > c1;
+    var low = 0.0;
+    var high = BIG;
+    var ground_bound = false;
+    if (rising) {
+        if (!escape) { return f; }
+        low = h;
+    } else if (P.flags.z != GROUND_NONE && profile[profile_index_ceil(h)].y - P.profile.y > c1) {
+        high = h;
+        ground_bound = true;
+    } else if (profile[profile_index_floor(h)].y < c1 && escape) {
+    } else {
+        return f;
+    }
+    if (objects && P.box_min.w > 0.5) {
+        let c = 0.5 * (P.box_min.xyz + P.box_max.xyz);
+        let r = 0.5 * length(P.box_max.xyz - P.box_min.xyz);
+        if (r >= 0.5 * BIG || may_meet_ball(p, v, c, r, low, high)) { return f; }
+    }
+    for (var j = 0u; j < P.size.z; j++) {
+        let z = hotspots[j];
+        if (low >= z.b.w) { continue; }
+        if (z.b.w >= 0.5 * BIG) { return f; }
+        let rho = length(vec2<f32>(abs(z.a.z) + z.b.z, abs(z.a.w) + z.b.z));
+        let lo = vec3<f32>(z.a.z - z.b.z, -rho * rho / P.profile.w - 1.0, z.a.w - z.b.z);
+        let hi = vec3<f32>(z.a.z + z.b.z, z.b.w, z.a.w + z.b.z);
+        if (may_meet_ball(p, v, 0.5 * (lo + hi), 0.5 * length(hi - lo), low, high)) { return f; }
+    }
+    if (ground_bound) {
+        f.kind = 2u;
+        return f;
+    }
+    f.kind = 1u;
+    if (rising && above) {
+        f.dir = vn;
+        return f;
+    }
+    // Round_sky: the elevation at the top from Bouguer, less the angle swept.
+    let n = 1.0 + delta;
+    let vt = vn - up * se;
+    let vtl = length(vt);
+    if (vtl == 0.0) {
+        f.dir = up * sign(se);
+        return f;
+    }
+    let forward = vt / vtl;
+    let f0 = ((1.0 + k) * n * se) * ((1.0 + k) * n * se);
+    var phi = 0.0;
+    if (rising) {
+        phi = sweep_up(h, f0, c1);
+    } else {
+        let d = sweep_down(h, f0, c1);
+        phi = d.x + sweep_up(d.y, 0.0, c1);
+    }
+    let mt = P.profile.z;
+    let omc = max((mt - c1) / (1.0 + mt), 0.0);
+    let e = 2.0 * asin(min(sqrt(0.5 * omc), 1.0)) - phi;
+    f.dir = forward * cos(e) + up * sin(e);
     return f;
 }
 
@@ -510,18 +716,25 @@ fn hermite_v(s: Seg, t: f32) -> vec3<f32> {
     return s.v0 * (1.0 - h01) + s.a0 * (s.h * (t - 2.0 * t2 + t3)) + s.v1 * h01 + s.a1 * (s.h * (t3 - t2));
 }
 
+// The height along the step at θ and its rate dh/dθ.
+fn seg_height(s: Seg, t: f32) -> vec2<f32> {
+    let e = hermite(s, t);
+    let hu = height_up(e[0]);
+    return vec2<f32>(hu.w, dot(e[1], hu.xyz));
+}
+
 // The root in [a, b] of the height, g(a) and g(b) of opposite signs.
 fn height_root(s: Seg, a0: f32, b0: f32) -> f32 {
     var a = a0;
     var b = b0;
-    let rising = hermite(s, a)[0].y < 0.0;
+    let rising = seg_height(s, a).x < 0.0;
     var t = 0.5 * (a + b);
     for (var i = 0; i < 40; i++) {
-        let e = hermite(s, t);
-        let g = e[0].y;
+        let e = seg_height(s, t);
+        let g = e.x;
         if (g == 0.0) { return t; }
         if ((g < 0.0) == rising) { a = t; } else { b = t; }
-        let newton = t - g / e[1].y;
+        let newton = t - g / e.y;
         var next = 0.5 * (a + b);
         if (newton > a && newton < b) { next = newton; }
         if (abs(next - t) <= 1e-7 || b - a <= 1e-7) { return next; }
@@ -532,18 +745,20 @@ fn height_root(s: Seg, a0: f32, b0: f32) -> f32 {
 
 // The first θ where the step is below ground, or −1 (trace::first_ground_crossing).
 fn ground_crossing(s: Seg) -> f32 {
-    if (s.x0.y < 0.0) { return 0.0; }
-    if (s.x1.y < 0.0) { return height_root(s, 0.0, 1.0); }
-    if (s.v0.y < 0.0 && s.v1.y > 0.0) {
+    let u0 = height_up(s.x0);
+    let u1 = height_up(s.x1);
+    if (u0.w < 0.0) { return 0.0; }
+    if (u1.w < 0.0) { return height_root(s, 0.0, 1.0); }
+    if (dot(s.v0, u0.xyz) < 0.0 && dot(s.v1, u1.xyz) > 0.0) {
         // The lowest point: where the slope changes sign.
         var a = 0.0;
         var b = 1.0;
         for (var i = 0; i < 30; i++) {
             let m = 0.5 * (a + b);
-            if (hermite(s, m)[1].y < 0.0) { a = m; } else { b = m; }
+            if (seg_height(s, m).y < 0.0) { a = m; } else { b = m; }
         }
         let lowest = 0.5 * (a + b);
-        if (hermite(s, lowest)[0].y < 0.0) { return height_root(s, 0.0, lowest); }
+        if (seg_height(s, lowest).x < 0.0) { return height_root(s, 0.0, lowest); }
     }
     return -1.0;
 }
@@ -757,7 +972,12 @@ fn march(r: Ray) -> Marched {
         if (go < room) { goal = theta + go / arc_per_theta; }
         if (ground_theta >= 0.0 && ground_theta <= goal) {
             let e = hermite(seg, ground_theta);
-            let point = vec3<f32>(e[0].x, 0.0, e[0].z);
+            var point = vec3<f32>(e[0].x, 0.0, e[0].z);
+            if (P.profile.w > 0.0) {
+                // The foot of the crossing's vertical on the sphere.
+                let hu = height_up(e[0]);
+                point = e[0] - hu.xyz * hu.w;
+            }
             let s = seg.s0 + ground_theta * (seg.s1 - seg.s0);
             return Marched(true, ray, Outcome(2u, 0u, point, normalize(hermite_v(seg, ground_theta)), s));
         }
@@ -846,7 +1066,8 @@ fn shade(o: Outcome) -> vec3<f32> {
     }
     let albedo = ground_albedo(o.point.x, o.point.z);
     if (albedo_only) { return albedo; }
-    return light(o.point + vec3<f32>(0.0, 1e-3, 0.0), vec3<f32>(0.0, 1.0, 0.0), albedo);
+    let up = height_up(o.point).xyz;
+    return light(o.point + up * 1e-3, up, albedo);
 }
 
 // --------------------------------------------------------------- the camera

@@ -619,6 +619,7 @@ impl App {
                 scene.step,
                 scene.ground.is_some(),
                 Aabb::of_objects(&scene.objects),
+                scene.earth,
             );
             g.buffers.set_air(&medium, &air);
             g.tracer.update(&g.gpu, &g.buffers);

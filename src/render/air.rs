@@ -20,10 +20,30 @@
 //!   then escaping as above: sky.
 //!
 //! Anything else (a ray trapped in a duct, a ray inside a zone) is integrated.
+//!
+//! # Over the round earth
+//!
+//! Over the sphere of radius R (centre (0, −R, 0)) the medium takes the height
+//! h above the sphere for y ([`Optics`], [`OnEarth`]), the zones are cylinders
+//! in (x, h, z), and the rays are integrated in that air. Outside the zones
+//! the air is spherically symmetric, so a ray stays in the plane through the
+//! centre and its own direction and keeps Bouguer's invariant
+//! `L = n·r·cos(elevation) = |(p − c) × v|` (r = R + h). With the profile of
+//! the modified refractivity M(h) = n(h)·(1 + h/R) − 1 tabulated in place of
+//! δ, the decisions above hold word for word with `c = L/R`: a ray reaches h
+//! only if 1 + M(h) ≥ c. Objects and zones count as met unless their bounding
+//! ball misses the ray's plane, its heights or the half of the plane ahead of
+//! the ray. A ray that escapes shows the sky along the straight line it
+//! leaves the profile's top on: its elevation there from Bouguer, turned by
+//! the angle the ray sweeps around the centre on its way (integrated over the
+//! tabulated M, see [`Air::sky_direction`]); above the top, a rising ray is
+//! straight. No path table is built over the sphere (its paths are those of
+//! the flat ground): every ray is integrated.
 
 use super::accel::Aabb;
 use crate::math::V3;
 use crate::medium::{Field, IndexField, LogisticMedium, Medium, VerticalFeature};
+use crate::trace::{Earth, OnEarth};
 use glam::{DVec2, DVec3};
 
 /// Where a logistic term's σ is within e^(−ZONE_UNITS) of its limit: the term
@@ -143,18 +163,69 @@ pub struct Air {
     profile: Profile,
     ground: bool,
     objects: Option<Aabb>,
+    earth: Earth,
+}
+
+/// The air's index field as the rays see it: the medium itself over the flat
+/// ground, [`OnEarth`] (heights above the sphere) over the round earth. Over
+/// the flat ground every call goes straight to the medium, so flat renders
+/// are bit for bit those of the medium alone.
+#[derive(Clone, Copy, Debug)]
+pub struct Optics<'a> {
+    field: &'a Field,
+    earth: Earth,
+}
+
+impl IndexField<f64> for Optics<'_> {
+    #[inline]
+    fn delta(&self, p: V3) -> f64 {
+        match self.earth {
+            Earth::Flat => self.field.delta(p),
+            Earth::Round { radius } => OnEarth {
+                field: self.field,
+                radius,
+            }
+            .delta(p),
+        }
+    }
+
+    #[inline]
+    fn delta_gradient(&self, p: V3) -> (f64, V3) {
+        match self.earth {
+            Earth::Flat => self.field.delta_gradient(p),
+            Earth::Round { radius } => OnEarth {
+                field: self.field,
+                radius,
+            }
+            .delta_gradient(p),
+        }
+    }
+
+    fn is_stratified(&self) -> bool {
+        self.earth.is_flat() && self.field.is_stratified()
+    }
+
+    fn ceiling(&self) -> f64 {
+        self.field.ceiling()
+    }
+
+    fn step_limit(&self, h: f64, vh: f64) -> f64 {
+        self.field.step_limit(h, vh)
+    }
 }
 
 impl Air {
     /// Analyses `medium` (or δ ≡ 0 when `straight`) for rendering with RK4
-    /// steps of `step` metres. `ground`: whether the plane y = 0 stops rays;
-    /// `objects`: the box holding every object (None: no objects).
+    /// steps of `step` metres. `ground`: whether the ground (the plane y = 0,
+    /// or the sphere of `earth`) stops rays; `objects`: the box holding every
+    /// object (None: no objects).
     pub fn new(
         medium: &Medium,
         straight: bool,
         step: f64,
         ground: bool,
         objects: Option<Aabb>,
+        earth: Earth,
     ) -> Air {
         let medium = if straight || !medium.has_terms() {
             Medium::Logistic(LogisticMedium::vacuum())
@@ -209,7 +280,16 @@ impl Air {
             STEP_GROWTH_MAX * step
         };
 
-        let profile = Self::profile(&field, &envelope.layers, curvature_max * n_max);
+        let profile = match earth {
+            Earth::Flat => Self::profile(&field, &envelope.layers, curvature_max * n_max),
+            Earth::Round { radius } => Self::modified_profile(
+                &field,
+                &envelope.layers,
+                curvature_max * n_max,
+                n_max,
+                radius,
+            ),
+        };
         Air {
             field,
             straight,
@@ -222,6 +302,73 @@ impl Air {
             profile,
             ground,
             objects,
+            earth,
+        }
+    }
+
+    /// The profile over the sphere of radius `r`: the modified refractivity
+    /// M(h) = n(h)·(1 + h/R) − 1 in place of δ, so that Bouguer's invariant
+    /// of a ray, L = n·r·cos(elevation) (r = R + h), reads as Snell's does on
+    /// the flat ground: the ray reaches h only if 1 + M(h) ≥ L/R. The margin
+    /// bounds M's slope, δ's plus n/R.
+    fn modified_profile(
+        field: &Field,
+        layers: &[VerticalFeature],
+        gradient_max: f64,
+        n_max: f64,
+        r: f64,
+    ) -> Profile {
+        let flat = Self::profile(field, layers, gradient_max);
+        let top = flat.top();
+        let delta: Vec<f64> = flat
+            .delta
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let h = i as f64 * flat.dy;
+                // (1 + δ)(1 + h/R) − 1 without losing δ to the 1.
+                d + h / r + d * h / r
+            })
+            .collect();
+        let n = delta.len();
+        let mut prefix_min = delta.clone();
+        for i in 1..n {
+            prefix_min[i] = prefix_min[i - 1].min(delta[i]);
+        }
+        let mut suffix_min = delta.clone();
+        for i in (0..n - 1).rev() {
+            suffix_min[i] = suffix_min[i + 1].min(delta[i]);
+        }
+        let slope = gradient_max * (1.0 + top / r) + n_max / r;
+        Profile {
+            dy: flat.dy,
+            delta,
+            prefix_min,
+            suffix_min,
+            margin: 0.5 * slope * flat.dy + 1e-15,
+        }
+    }
+
+    /// The shape of the ground.
+    pub fn earth(&self) -> Earth {
+        self.earth
+    }
+
+    /// The index field the rays are integrated in ([`Optics`]).
+    pub fn optics(&self) -> Optics<'_> {
+        Optics {
+            field: &self.field,
+            earth: self.earth,
+        }
+    }
+
+    /// `p` with its height above the ground for y (the frame the medium and
+    /// its zones are written in); `p` itself over the flat ground.
+    #[inline]
+    fn local(&self, p: DVec3) -> DVec3 {
+        match self.earth {
+            Earth::Flat => p,
+            Earth::Round { .. } => DVec3::new(p.x, self.earth.height(V3::new(p.x, p.y, p.z)), p.z),
         }
     }
 
@@ -290,6 +437,7 @@ impl Air {
 
     /// Whether `p` lies in a hot-spot zone (where the air is not stratified).
     pub fn in_zone(&self, p: DVec3) -> bool {
+        let p = self.local(p);
         self.zones.iter().any(|z| z.contains(p))
     }
 
@@ -302,6 +450,7 @@ impl Air {
         if self.zones.is_empty() {
             return self.step_outside;
         }
+        let p = self.local(p);
         let mut inside = f64::INFINITY;
         let mut approach = f64::INFINITY;
         for z in &self.zones {
@@ -354,7 +503,8 @@ impl Air {
 
     /// The tabulated stratified profile, for the GPU previewer's Snell
     /// decisions: the height spacing, the margin of the minima, and per height
-    /// δ, its minimum below and its minimum above.
+    /// δ (over the round earth: the modified refractivity M), its minimum
+    /// below and its minimum above.
     pub fn profile_tables(&self) -> (f64, f64, &[f64], &[f64], &[f64]) {
         let p = &self.profile;
         (p.dy, p.margin, &p.delta, &p.prefix_min, &p.suffix_min)
@@ -381,6 +531,9 @@ impl Air {
 
     /// [`Air::fate`], with or without regard to the objects.
     fn fate_past(&self, p: DVec3, v: DVec3, objects: bool) -> Option<Fate> {
+        if let Earth::Round { radius } = self.earth {
+            return self.round_fate(p, v, objects, radius);
+        }
         if p.y < 0.0 || v.y == 0.0 || self.in_zone(p) {
             return None;
         }
@@ -423,6 +576,232 @@ impl Air {
             Fate::Sky(self.asymptotic_direction(h, c))
         })
     }
+}
+
+/// Over the round earth: the same decisions from Bouguer's invariant (see
+/// the module documentation), with the profile of the modified refractivity.
+impl Air {
+    fn round_fate(&self, p: DVec3, v: DVec3, objects: bool, radius: f64) -> Option<Fate> {
+        let (h, up) = self.earth.height_and_up(V3::new(p.x, p.y, p.z));
+        let up = DVec3::new(up.x, up.y, up.z);
+        if !(h >= 0.0)
+            || self
+                .zones
+                .iter()
+                .any(|z| z.contains(DVec3::new(p.x, h, p.z)))
+        {
+            return None;
+        }
+        let vr = v.dot(up);
+        if vr == 0.0 {
+            return None;
+        }
+        let vt = v - up * vr;
+        // L/R = n·r·cos(elevation)/R.
+        let c = (radius + h) * vt.length() / radius;
+        let c1 = c - 1.0;
+        let rising = vr > 0.0;
+        // Above the profile's top δ no longer changes and M grows with h: a
+        // rising ray there never turns down.
+        let above = h >= self.profile.top();
+        let escape = (rising && above) || self.profile.min_above(h) > c1;
+        let (low, high, ground_bound) = if rising {
+            if !escape {
+                return None;
+            }
+            (h, f64::INFINITY, false)
+        } else if self.ground && self.profile.min_below(h) > c1 {
+            (0.0, h, true)
+        } else if self.profile.dips_below(h, c1) && escape {
+            (0.0, f64::INFINITY, false)
+        } else {
+            return None;
+        };
+        if let Some(b) = &self.objects
+            && objects
+            && may_meet_ball(p, v, radius, ball(b), low, high)
+        {
+            return None;
+        }
+        for z in &self.zones {
+            if low >= z.top {
+                continue;
+            }
+            if !z.top.is_finite() {
+                return None;
+            }
+            // The zone's cylinder in world coordinates: heights in [0, top]
+            // lie at y ∈ [−ρ²/R − 1, top] within ρ of the axis (ρ ≪ R).
+            let rho = (z.x.abs() + z.radius).hypot(z.z.abs() + z.radius);
+            let b = Aabb {
+                min: DVec3::new(z.x - z.radius, -rho * rho / radius - 1.0, z.z - z.radius),
+                max: DVec3::new(z.x + z.radius, z.top, z.z + z.radius),
+            };
+            if may_meet_ball(p, v, radius, ball(&b), low, high) {
+                return None;
+            }
+        }
+        Some(if ground_bound {
+            Fate::GroundBound
+        } else if rising && above {
+            // Straight from here on.
+            Fate::Sky(v.normalize())
+        } else {
+            Fate::Sky(self.round_sky(h, up, vt, vr, c, radius))
+        })
+    }
+
+    /// The direction in which a ray that escapes leaves the top of the
+    /// profile, where it goes straight: its local elevation there follows
+    /// from Bouguer, cos e = (L/R) / (1 + M_top), and the local vertical has
+    /// turned by the angle φ the ray sweeps around the centre on its way,
+    /// dφ/dh = (L/R) / ((1 + h/R)·R·√F), F = (1 + M)² − (L/R)², integrated
+    /// over the tabulated M as exactly as a piecewise linear F allows
+    /// (∫ dh/√F = 2Δh/(√F_a + √F_b)), which keeps the turning point's
+    /// integrable singularity exact. The elevation seen from here is e − φ.
+    fn round_sky(&self, h: f64, up: DVec3, vt: DVec3, vr: f64, c: f64, radius: f64) -> DVec3 {
+        let vtl = vt.length();
+        if vtl == 0.0 {
+            return up * vr.signum();
+        }
+        let forward = vt / vtl;
+        // F at the ray's own point, exactly: (r·v_r/R)².
+        let f0 = ((radius + h) * vr / radius).powi(2);
+        let phi = if vr > 0.0 {
+            self.sweep_up(h, f0, c, radius)
+        } else {
+            let (turn, down) = self.sweep_down(h, f0, c, radius);
+            down + self.sweep_up(turn, 0.0, c, radius)
+        };
+        // acos(c/(1 + M_top)) through 1 − cos = (M_top − (c − 1))/(1 + M_top),
+        // which keeps its digits near the horizon (acos near 1 does not).
+        let m_top = self.profile.at_top();
+        let one_minus_cos = ((m_top - (c - 1.0)) / (1.0 + m_top)).max(0.0);
+        let e_top = 2.0 * (0.5 * one_minus_cos).sqrt().min(1.0).asin();
+        let e = e_top - phi;
+        forward * e.cos() + up * e.sin()
+    }
+
+    /// F = (1 + M)² − c² at profile node i.
+    fn bouguer_f(&self, i: usize, c: f64) -> f64 {
+        let m = self.profile.delta[i];
+        // (1 + m)² − c² = (1 + m − c)(1 + m + c), without cancelling 1s.
+        (m - (c - 1.0)) * (1.0 + m + c)
+    }
+
+    /// φ swept from height `h` (where F = `f`) up to the profile's top, on a
+    /// mesh that follows the nodes near `h` and grows by 1/32 of the distance
+    /// beyond (the integrand is smooth away from the turning point), in
+    /// pieces of at most R/1000 (where 1/(1 + h/R) is linear to 10⁻⁶).
+    fn sweep_up(&self, h: f64, f: f64, c: f64, radius: f64) -> f64 {
+        let p = &self.profile;
+        let last = p.delta.len() - 1;
+        let stride_max = ((1e-3 * radius / p.dy) as usize).max(1);
+        let i0 = ((h / p.dy).floor() as usize + 1).min(last + 1);
+        let (mut ha, mut fa) = (h, f.max(0.0));
+        let mut phi = 0.0;
+        let mut i = i0;
+        while i <= last {
+            let hb = i as f64 * p.dy;
+            let fb = self.bouguer_f(i, c).max(0.0);
+            phi += sweep_piece(ha, fa, hb, fb, c, radius);
+            if i == last {
+                break;
+            }
+            (ha, fa) = (hb, fb);
+            i = (i + (1 + (i - i0) / 32).min(stride_max)).min(last);
+        }
+        phi
+    }
+
+    /// φ swept from height `h` (where F = `f`) down to the turning height,
+    /// where F = 0 (linear between the nodes), and that height.
+    fn sweep_down(&self, h: f64, f: f64, c: f64, radius: f64) -> (f64, f64) {
+        let p = &self.profile;
+        let last = p.delta.len() - 1;
+        let (mut ha, mut fa) = (h, f.max(0.0));
+        let mut phi = 0.0;
+        let mut i = ((h / p.dy).ceil() as usize).min(last + 1);
+        while i > 0 {
+            i -= 1;
+            let hb = i as f64 * p.dy;
+            if hb >= ha {
+                continue;
+            }
+            let fb = self.bouguer_f(i, c);
+            if fb <= 0.0 {
+                let turn = ha - (ha - hb) * fa / (fa - fb);
+                phi += sweep_piece(turn, 0.0, ha, fa, c, radius);
+                return (turn, phi);
+            }
+            phi += sweep_piece(hb, fb, ha, fa, c, radius);
+            (ha, fa) = (hb, fb);
+        }
+        (0.0, phi)
+    }
+}
+
+/// ∫ (c/R) dh / ((1 + h/R)·√F) over [ha, hb] for F linear between fa and fb.
+#[inline]
+fn sweep_piece(ha: f64, fa: f64, hb: f64, fb: f64, c: f64, radius: f64) -> f64 {
+    let s = fa.sqrt() + fb.sqrt();
+    if s > 0.0 {
+        c / radius * 2.0 * (hb - ha) / s / (1.0 + 0.5 * (ha + hb) / radius)
+    } else {
+        0.0
+    }
+}
+
+/// The bounding ball (centre, radius) of a box.
+fn ball(b: &Aabb) -> (DVec3, f64) {
+    ((b.min + b.max) * 0.5, (b.max - b.min).length() * 0.5)
+}
+
+/// Whether a ray at `p` with ray vector `v` over the sphere of radius
+/// `radius` may meet the ball (centre, radius) while its height stays in
+/// [low, high]: over a spherically symmetric air the ray stays in the plane
+/// through the centre, `p` and `v`, and sweeps forward around the centre (by
+/// less than half a turn within any scene); the ball must cut that plane,
+/// reach the heights, and lie ahead. Conservative: true when unsure. Every
+/// quantity is taken relative to `p` (the plane holds p − c, so only the
+/// ball's offset from p enters the products), as the shader does in f32.
+fn may_meet_ball(
+    p: DVec3,
+    v: DVec3,
+    radius: f64,
+    (bc, br): (DVec3, f64),
+    low: f64,
+    high: f64,
+) -> bool {
+    if !(bc.is_finite() && br.is_finite()) {
+        return true;
+    }
+    let q = p - DVec3::new(0.0, -radius, 0.0);
+    let n = q.cross(v);
+    let nl = n.length();
+    if !(nl > 0.0) {
+        return true;
+    }
+    let normal = n / nl;
+    let rel = bc - p;
+    if rel.dot(normal).abs() > br {
+        return false;
+    }
+    let hb = Earth::Round { radius }.height(V3::new(bc.x, bc.y, bc.z));
+    if hb - br > high || hb + br < low {
+        return false;
+    }
+    let ql = q.length();
+    let e1 = q / ql;
+    let e2 = normal.cross(e1);
+    let (bx, by) = (ql + rel.dot(e1), rel.dot(e2));
+    let dp = bx.hypot(by);
+    if dp <= br {
+        return true;
+    }
+    let beta = by.atan2(bx);
+    let gamma = (br / dp).asin();
+    beta + gamma >= 0.0 && beta - gamma < std::f64::consts::PI
 }
 
 /// Whether the half-line `o + t·h` (t ≥ 0; h unit or zero) meets the disc.

@@ -23,10 +23,12 @@
 //!   the ray leaves the cell's empty sphere; near surfaces the cell's short
 //!   object list is evaluated; over-relaxed as in *enhanced*.
 //!
-//! The ground (y = 0) is not an SDF (a plane would throttle every grazing ray to
-//! steps of its height): each RK4 step's quintic Hermite interpolant is tested
-//! for a crossing, dips between nodes included, and the crossing is located
-//! to full precision. A ray that travels the maximum distance, or whose fate
+//! The ground (y = 0, or the sphere of the round earth, [`Air::earth`]) is not
+//! an SDF (a plane would throttle every grazing ray to steps of its height):
+//! each RK4 step's quintic Hermite interpolant is tested for a crossing, dips
+//! between nodes included, and the crossing is located to full precision.
+//! Over the round earth the rays are integrated in the air of heights above
+//! the sphere ([`Air::optics`]). A ray that travels the maximum distance, or whose fate
 //! [`Air::fate`] decides as the sky, shows the sky along its final direction.
 
 use super::accel::{Counters, Query, SceneDistance};
@@ -35,7 +37,7 @@ use super::paths::{PathTable, TableRay};
 use crate::math::V3;
 use crate::scene::sdf::nearest_object;
 use crate::trace::state::rate;
-use crate::trace::{RayState, Segment, rk4_step};
+use crate::trace::{Earth, RayState, Segment, rk4_step};
 use glam::DVec3;
 
 /// Over-relaxation factor of the enhanced and quadric tracers.
@@ -91,9 +93,9 @@ pub enum Outcome {
         /// Arc length from the camera (metres).
         distance: f64,
     },
-    /// The ground plane.
+    /// The ground (the plane y = 0, or the sphere).
     Ground {
-        /// The hit point (y = 0).
+        /// The hit point (on the ground).
         point: DVec3,
         /// Unit direction of the ray there.
         direction: DVec3,
@@ -159,7 +161,7 @@ pub struct Marcher<'a> {
     pub tolerance: HitTolerance,
     /// Arc length after which a ray shows the sky (metres).
     pub max_distance: f64,
-    /// Whether the ground plane y = 0 stops rays.
+    /// Whether the ground (the plane y = 0, or the sphere) stops rays.
     pub ground: bool,
 }
 
@@ -206,15 +208,15 @@ struct Pending<S> {
 impl Marcher<'_> {
     /// Traces the ray from `origin` along the unit `dir` by integrating it.
     pub fn march(&self, origin: DVec3, dir: DVec3, stats: &mut MarchStats) -> Outcome {
-        let field = self.air.field();
+        let field = self.air.optics();
         let x = V3::new(origin.x, origin.y, origin.z);
-        let n0 = 1.0 + crate::medium::IndexField::delta(field, x);
+        let n0 = 1.0 + crate::medium::IndexField::delta(&field, x);
         let y = RayState {
             x,
             v: V3::new(dir.x, dir.y, dir.z) * n0,
             s: 0.0,
         };
-        let f = rate(field, &y, &mut stats.medium_evaluations);
+        let f = rate(&field, &y, &mut stats.medium_evaluations);
         let n_max = if self.air.is_straight() {
             1.0
         } else {
@@ -431,7 +433,7 @@ impl CurvedPath<'_, '_> {
         let (y, f) = (self.seg.y1, self.seg.f1);
         let h_arc = m.air.step_at(dvec(y.x)).min(m.max_distance);
         let h = h_arc / self.n_max;
-        let (y1, f1) = rk4_step(m.air.field(), &y, &f, h, &mut stats.medium_evaluations);
+        let (y1, f1) = rk4_step(&m.air.optics(), &y, &f, h, &mut stats.medium_evaluations);
         stats.rk4_steps += 1;
         self.seg = Segment {
             y0: y,
@@ -443,7 +445,7 @@ impl CurvedPath<'_, '_> {
         self.theta = 0.0;
         self.arc_per_theta = h_arc;
         self.ground_theta = if m.ground {
-            ground_crossing(&self.seg)
+            ground_crossing(&self.seg, m.air.earth())
         } else {
             None
         };
@@ -498,8 +500,7 @@ impl RayPath for CurvedPath<'_, '_> {
             && tg <= target
         {
             let st = self.seg.state(tg);
-            let mut point = dvec(st.x);
-            point.y = 0.0;
+            let point = on_ground(st.x, m.air.earth());
             return Advance::End {
                 at: (tg - self.theta).max(0.0) * self.arc_per_theta,
                 outcome: Outcome::Ground {
@@ -530,14 +531,23 @@ impl RayPath for CurvedPath<'_, '_> {
     }
 }
 
-/// The first θ ∈ [0, 1] where the step is below y = 0: the tracer's own test
-/// (an end below ground, or a dip between two nodes above it), so renders and
-/// the fitter's occlusion flags agree.
-fn ground_crossing(seg: &Segment<f64>) -> Option<f64> {
-    if seg.y0.x.y < 0.0 {
+/// The first θ ∈ [0, 1] where the step is below the ground (y = 0 or the
+/// sphere): the tracer's own test (an end below ground, or a dip between two
+/// nodes above it), so renders and the fitter's occlusion flags agree.
+fn ground_crossing(seg: &Segment<f64>, earth: Earth) -> Option<f64> {
+    if earth.height(seg.y0.x) < 0.0 {
         return Some(0.0);
     }
-    crate::trace::first_ground_crossing(seg, crate::trace::Earth::Flat)
+    crate::trace::first_ground_crossing(seg, earth)
+}
+
+/// The ground point at a crossing found at `x`: y = 0 on the flat ground,
+/// the foot of x's vertical on the sphere (x is within rounding of it).
+fn on_ground(x: V3, earth: Earth) -> DVec3 {
+    match earth {
+        Earth::Flat => DVec3::new(x.x, 0.0, x.z),
+        Earth::Round { .. } => dvec(earth.foot(x)),
+    }
 }
 
 /// A camera ray on an interpolated table path.

@@ -188,6 +188,7 @@ impl Renderer {
             scene.step,
             scene.ground.is_some(),
             objects_box,
+            scene.earth,
         );
         let mut setup = RenderStats::default();
         let start = Instant::now();
@@ -196,7 +197,9 @@ impl Renderer {
                 SceneDistance::Direct(scene.objects.clone())
             }
             TracerKind::Quadric => {
-                let floor = if scene.ground.is_some() {
+                // Over the sphere the ground sinks below y = 0 away from the
+                // origin: no floor to cut the grid at.
+                let floor = if scene.ground.is_some() && scene.earth.is_flat() {
                     0.0
                 } else {
                     f64::NEG_INFINITY
@@ -221,7 +224,11 @@ impl Renderer {
             sky: SkyModel::from_spec(
                 &scene.sky,
                 &scene.sun,
-                scene.camera.position.y,
+                scene.earth.height(crate::math::V3::new(
+                    scene.camera.position.x,
+                    scene.camera.position.y,
+                    scene.camera.position.z,
+                )),
                 camera.pixel_angle(),
             ),
             table: None,
@@ -231,9 +238,12 @@ impl Renderer {
             channels: Renderer::channel_renderers(scene, options),
         };
         // A dispersive render traces through its channels' renderers: this
-        // one's own table would go unused.
+        // one's own table would go unused. The table's paths are those of a
+        // flat ground (heights along y): over the sphere every ray is
+        // integrated.
         if options.path_reuse
             && r.channels.is_none()
+            && scene.earth.is_flat()
             && r.air.is_stratified()
             && !r.air.is_straight()
         {
@@ -386,7 +396,12 @@ impl Renderer {
                 if self.options.shading == Shading::Albedo {
                     return albedo;
                 }
-                self.light(point + DVec3::Y * 1e-3, DVec3::Y, albedo, shadow)
+                let up = self
+                    .scene
+                    .earth
+                    .up(crate::math::V3::new(point.x, point.y, point.z));
+                let up = DVec3::new(up.x, up.y, up.z);
+                self.light(point + up * 1e-3, up, albedo, shadow)
             }
         }
     }

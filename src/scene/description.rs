@@ -24,6 +24,7 @@
 //! | `medium` | the air, inline ([`Medium`], as in problem files) |
 //! | `medium_from` | instead of `medium`: a JSON file (path relative to the scene file) whose `medium` field is read, e.g. the result of `mirage fit`, or a problem file (its starting air) |
 //! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
+//! | `earth` | optional `{"radius": R}` (metres, ≥ 1000): the ground and the air's heights follow the sphere of radius R touching y = 0 at the origin ([`crate::trace::Earth`]); absent: the flat ground |
 //! | `objects` | signed-distance objects ([`SceneObject`], see [`super::sdf`]) |
 //! | `sun` | `elevation`, `azimuth` (degrees; azimuth from +z toward +x), `irradiance` (default 3.5, linear units), `color` (default white) |
 //! | `sky` | `{"type": "gradient", "zenith": rgb, "horizon": rgb}` (linear radiance; both optional), or `{"type": "physical", ...}`: Rayleigh + Mie single scattering with ozone, sun disc and stars (options in [`crate::render::sky`]) |
@@ -41,6 +42,7 @@ use super::sdf::{SceneObject, validate_objects};
 use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::Medium;
+use crate::trace::{Earth, EarthSpec};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -200,6 +202,9 @@ pub struct SceneFile {
     /// The ground plane y = 0, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+    /// The round earth (absent: the flat ground).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub earth: Option<EarthSpec>,
     /// The objects.
     #[serde(default)]
     pub objects: Vec<SceneObject>,
@@ -299,6 +304,9 @@ pub struct Scene {
     pub medium: Medium,
     /// The ground, if any.
     pub ground: Option<GroundAlbedo>,
+    /// The shape of the ground and of the air's layers: the plane y = 0 or
+    /// the sphere ([`Earth`]).
+    pub earth: Earth,
     /// The objects (validated).
     pub objects: Vec<SceneObject>,
     /// The sun.
@@ -500,6 +508,14 @@ impl Scene {
                 })
             }
         };
+        let earth = match &file.earth {
+            None => Earth::Flat,
+            Some(spec) => {
+                spec.validate()
+                    .map_err(|e| e.within("earth").in_file(path))?;
+                Earth::from(Some(*spec))
+            }
+        };
         validate_objects(&file.objects).map_err(|e| e.within("objects").in_file(path))?;
 
         let sun = {
@@ -613,6 +629,7 @@ impl Scene {
             camera,
             medium,
             ground,
+            earth,
             objects: file.objects,
             sun,
             sky,
