@@ -665,3 +665,15 @@ fn gpu_evaluates_real_air_as_the_cpu_field() {
     assert!(worst_delta < 1e-10, "δ off by {worst_delta:e}");
     assert!(worst_slope < 1e-4, "∂δ/∂h off by {worst_slope:e} relative");
 }
+
+#[test]
+fn gpu_matches_cpu_over_the_round_earth() {
+    // The looming freighter: real air with a cold-sea duct over the sphere,
+    // the hull lifted back over the horizon.
+    parity(
+        "gpu_matches_cpu_over_the_round_earth",
+        "looming.json",
+        320,
+        120,
+    );
+}

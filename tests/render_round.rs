@@ -323,3 +323,35 @@ fn early_decisions_agree_with_the_full_march() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The hull pixels of an albedo render of a bundled looming scene, small.
+fn hull_pixels(file: &str) -> usize {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("problems/scenes")
+        .join(file);
+    let scene = Scene::load(&path).unwrap();
+    let hull = scene.objects[0].albedo;
+    let image = render(
+        &scene,
+        &RenderOptions {
+            shading: Shading::Albedo,
+            width: Some(96),
+            height: Some(36),
+            ..RenderOptions::default()
+        },
+    );
+    image.pixels.iter().filter(|p| is(**p, hull)).count()
+}
+
+#[test]
+fn the_cold_sea_lifts_the_hull_over_the_horizon() {
+    // problems/scenes/looming*.json: the hull 15 km out is hidden by the
+    // curvature in standard air, lifted into view by the cold-sea duct, and
+    // in full view in standard air over the flat ground.
+    let standard = hull_pixels("looming-standard.json");
+    let looming = hull_pixels("looming.json");
+    let flat = hull_pixels("looming-flat.json");
+    assert_eq!(standard, 0, "the hull shows in standard air");
+    assert!(looming > 20, "the duct shows {looming} hull pixels");
+    assert!(flat > 20, "the flat ground shows {flat} hull pixels");
+}
