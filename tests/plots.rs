@@ -336,3 +336,61 @@ fn crowded_plots_keep_their_legends_in_bounds() {
     keep(&out);
     assert_eq!(decode(&out).dimensions(), (1400, 900));
 }
+
+/// Colour of the ground's line in the side view.
+const GROUND_LINE: [u8; 3] = [140, 110, 70];
+
+/// The mean row of the ground line's pixels in a band of columns of the side
+/// view, if it shows there.
+fn ground_row(img: &image::RgbImage, columns: std::ops::Range<u32>) -> Option<f64> {
+    let rows: Vec<u32> = columns
+        .flat_map(|x| (0..img.height()).map(move |y| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y).0 == GROUND_LINE)
+        .map(|(_, y)| y)
+        .collect();
+    (!rows.is_empty()).then(|| rows.iter().sum::<u32>() as f64 / rows.len() as f64)
+}
+
+#[test]
+fn ray_diagram_draws_the_round_earth_curved() {
+    // Over a 20 km earth the ground 800 m out lies 16 m below y = 0: the
+    // ground line falls from left to right; over the flat ground it is level.
+    let dir = tempfile::tempdir().unwrap();
+    let round_text = PROBLEM.replace(
+        r#""trace": {"#,
+        r#""earth": { "radius": 20000.0 }, "trace": {"#,
+    );
+    let mut rows = Vec::new();
+    for (name, text) in [("flat.png", PROBLEM.to_string()), ("round.png", round_text)] {
+        let p = Problem::parse(&text, Path::new(name)).unwrap();
+        let out = dir.path().join(name);
+        draw_rays(&p, &p.medium, &out).unwrap();
+        keep(&out);
+        let img = decode(&out);
+        let left = ground_row(&img, 150..200).expect("the ground shows on the left");
+        let right = ground_row(&img, SIDE_VIEW_RIGHT_EDGE - 120..SIDE_VIEW_RIGHT_EDGE - 70)
+            .expect("the ground shows on the right");
+        rows.push((left, right));
+    }
+    let ((fl, fr), (rl, rr)) = (rows[0], rows[1]);
+    assert!(
+        (fl - fr).abs() < 1.5,
+        "the flat ground is level: {fl} vs {fr}"
+    );
+    assert!(rr > rl + 40.0, "the round earth falls away: {rl} to {rr}");
+    let svg = dir.path().join("round.svg");
+    let round = Problem::parse(
+        &PROBLEM.replace(
+            r#""trace": {"#,
+            r#""earth": { "radius": 20000.0 }, "trace": {"#,
+        ),
+        Path::new("round.json"),
+    )
+    .unwrap();
+    draw_rays(&round, &round.medium, &svg).unwrap();
+    assert!(
+        std::fs::read_to_string(&svg)
+            .unwrap()
+            .contains("over the round earth")
+    );
+}

@@ -1,6 +1,13 @@
 //! The ray diagram of a problem: every pair's traced ray in side view, beside
 //! the refractivity profile δ(y) that bends it, and for real air beside the
 //! temperature T(h) that makes that δ (a panel of its own, on the same heights).
+//!
+//! Over the round earth (`earth` in the problem) the side view keeps the
+//! frame's y and draws the ground as the sphere's profile in pair 0's vertical
+//! plane, y = √(R² − ρ²) − R at horizontal distance ρ from the sphere's axis,
+//! so that a ray's height above the ground is its distance above that curve
+//! (the profile panels, δ and T against the height, are unchanged: above pair
+//! 0's origin height and y agree to its drop, ρ²/2R).
 
 use super::axes::{Axes, Span, build_chart, draw_axes, format_sig, pixel_mapper};
 use super::figure::{Figure, draw_header, draw_placeholder, save};
@@ -14,7 +21,7 @@ use crate::math::V3;
 use crate::medium::air::KELVIN;
 use crate::medium::{Field, IndexField, Medium};
 use crate::problem::Problem;
-use crate::trace::RayState;
+use crate::trace::{Earth, RayState};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -26,6 +33,8 @@ const SIDE_SHARE: f64 = 0.72;
 const SIDE_SHARE_AIR: f64 = 0.56;
 /// Heights sampled for the profile curves.
 const PROFILE_SAMPLES: usize = 400;
+/// Points of the round earth's profile across the side view.
+const GROUND_SAMPLES: usize = 400;
 
 const GROUND_FILL: RGBColor = RGBColor(238, 229, 212);
 const GROUND_LINE: RGBColor = RGBColor(140, 110, 70);
@@ -103,6 +112,9 @@ struct RayFigure {
     delta: (f64, f64),
     /// The range of `temperatures` (°C).
     temperature: (f64, f64),
+    /// Over the round earth, the ground's profile under pair 0's view: (view
+    /// distance, y) across the x range; empty over the flat ground.
+    ground: Vec<(f64, f64)>,
 }
 
 /// Unit horizontal direction from `origin` toward `target` (the target plane's
@@ -283,6 +295,37 @@ impl RayFigure {
         if !ys.is_empty() && ys.lo > 0.0 && ys.lo <= ys.width().max(1.0) {
             ys.include(0.0);
         }
+        // The sphere's profile under pair 0's view, sampled across the range.
+        let ground_at = |d: f64| -> Option<f64> {
+            let (Earth::Round { radius }, Some(pair)) =
+                (problem.trace.earth, problem.pairs.first())
+            else {
+                return None;
+            };
+            let o = pair.origin();
+            let u = pair.plane().normal;
+            let (gx, gz) = (o.x + d * u.x, o.z + d * u.z);
+            let rho2 = gx * gx + gz * gz;
+            // √(R² − ρ²) − R without cancellation.
+            (rho2 < radius * radius).then(|| -rho2 / ((radius * radius - rho2).sqrt() + radius))
+        };
+        let mut ground = Vec::new();
+        if !ys.is_empty() {
+            for k in 0..=GROUND_SAMPLES {
+                let d = x.0 + (x.1 - x.0) * k as f64 / GROUND_SAMPLES as f64;
+                if let Some(g) = ground_at(d) {
+                    ground.push((d, g));
+                }
+            }
+            // The ground within the scene's own height shows; a ground
+            // far below it is left out, as over the flat ground.
+            let width = ys.width().max(1.0);
+            for &(_, g) in &ground {
+                if g >= ys.lo - width {
+                    ys.include(g);
+                }
+            }
+        }
         let fallback_y = (-1.0, 10.0);
         let y = ys.padded(0.08, fallback_y);
 
@@ -406,6 +449,7 @@ impl RayFigure {
             y,
             delta,
             temperature,
+            ground,
         }
     }
 
@@ -570,13 +614,25 @@ impl RayFigure {
         } else {
             ("height (m)", None)
         };
+        // Over the round earth the vertical is the frame's y; heights are
+        // measured from the curved ground.
+        let y_desc = if self.ground.is_empty() {
+            y_desc.to_string()
+        } else {
+            y_desc.replacen("height", "y", 1)
+        };
+        let caption = if self.ground.is_empty() {
+            "side view along each pair's line of sight"
+        } else {
+            "side view along each pair's line of sight, over the round earth"
+        };
         draw_axes(
             area,
             &mut chart,
             &Axes {
-                caption: "side view along each pair's line of sight",
+                caption,
                 x_desc: "distance along the view (m)",
-                y_desc,
+                y_desc: &y_desc,
                 x_ticks: 10,
                 y_ticks: 8,
                 x_format: &metres,
@@ -586,8 +642,33 @@ impl RayFigure {
         )?;
 
         let plot = chart.plotting_area();
-        // Ground: filled below y = 0, hot spots marked on it, then its line.
-        if y.0 < 0.0 {
+        if !self.ground.is_empty() {
+            // The round earth: filled below the sphere's profile, hot spots
+            // marked on it, then its line.
+            let mut fill = self.ground.clone();
+            fill.push((x.1, y.0));
+            fill.push((x.0, y.0));
+            plot.draw(&Polygon::new(fill, GROUND_FILL.filled()))?;
+            let depth = 0.02 * (y.1 - y.0);
+            for b in &self.bands {
+                let under: Vec<(f64, f64)> = self
+                    .ground
+                    .iter()
+                    .copied()
+                    .filter(|q| b.from <= q.0 && q.0 <= b.to)
+                    .collect();
+                let mut band = under.clone();
+                band.extend(under.iter().rev().map(|&(d, g)| (d, g - depth)));
+                if band.len() >= 3 {
+                    plot.draw(&Polygon::new(band, b.color.filled()))?;
+                }
+            }
+            plot.draw(&PathElement::new(
+                self.ground.clone(),
+                GROUND_LINE.stroke_width(2),
+            ))?;
+        } else if y.0 < 0.0 {
+            // Ground: filled below y = 0, hot spots marked on it, then its line.
             plot.draw(&Rectangle::new(
                 [(x.0, y.0), (x.1, 0.0_f64.min(y.1))],
                 GROUND_FILL.filled(),
@@ -600,7 +681,7 @@ impl RayFigure {
                 ))?;
             }
         }
-        if y.0 <= 0.0 && 0.0 <= y.1 {
+        if self.ground.is_empty() && y.0 <= 0.0 && 0.0 <= y.1 {
             plot.draw(&PathElement::new(
                 vec![(x.0, 0.0), (x.1, 0.0)],
                 GROUND_LINE.stroke_width(2),
