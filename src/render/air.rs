@@ -584,7 +584,8 @@ impl Air {
     fn round_fate(&self, p: DVec3, v: DVec3, objects: bool, radius: f64) -> Option<Fate> {
         let (h, up) = self.earth.height_and_up(V3::new(p.x, p.y, p.z));
         let up = DVec3::new(up.x, up.y, up.z);
-        if !(h >= 0.0)
+        if h.is_nan()
+            || h < 0.0
             || self
                 .zones
                 .iter()
@@ -779,7 +780,7 @@ fn may_meet_ball(
     let q = p - DVec3::new(0.0, -radius, 0.0);
     let n = q.cross(v);
     let nl = n.length();
-    if !(nl > 0.0) {
+    if nl.is_nan() || nl <= 0.0 {
         return true;
     }
     let normal = n / nl;
