@@ -19,6 +19,8 @@ pub mod plot;
 pub mod preview;
 pub mod problem;
 pub mod profile;
+#[cfg(feature = "python")]
+mod python;
 pub mod render;
 pub mod scene;
 pub mod trace;

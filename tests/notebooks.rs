@@ -6,10 +6,11 @@ mod common;
 
 use std::process::Command;
 
-const NOTEBOOKS: [&str; 3] = [
+const NOTEBOOKS: [&str; 4] = [
     "fit_walkthrough.ipynb",
     "tradeoff.ipynb",
     "validation.ipynb",
+    "python_api.ipynb",
 ];
 
 #[test]
@@ -37,8 +38,10 @@ fn notebooks_are_stored_without_outputs() {
         }
         assert!(code >= 3, "{name}: too few code cells");
         assert!(
-            text.contains("mirage(\\\"") || text.contains("\\\"--mirage\\\""),
-            "{name}: the notebook should show the mirage command, as a user runs it"
+            text.contains("mirage(\\\"")
+                || text.contains("\\\"--mirage\\\"")
+                || text.contains("import mirage_air"),
+            "{name}: the notebook should show the mirage command, as a user runs it, or the Python package"
         );
     }
 }
