@@ -161,3 +161,160 @@ fn regenerate() {
         std::fs::write(&path, text + "\n").unwrap();
     }
 }
+
+/// F of `problem`'s pairs traced through `medium`.
+fn objective_at(problem: &Problem, medium: &LogisticMedium) -> f64 {
+    mirage::evaluate::trace_pairs(problem, &Medium::Logistic(medium.clone()))
+        .totals
+        .objective
+}
+
+/// Grows bundled example `name` and checks it against its truth: the same
+/// terms, each hot spot's centre within 0.4 of its radius, the inversion's
+/// height within 10 %, F at most twice the truth's, at the noise floor.
+fn grows_the_truth(name: &str) {
+    let ex = EXAMPLES.iter().find(|e| e.name == name).unwrap();
+    let problem = Problem::load(&file_of(name)).unwrap();
+    let truth = medium(ex.truth);
+    let report = mirage::fit::fit(&problem, None).unwrap();
+    let grown = report.medium.as_logistic().unwrap().clone();
+    let g = report.grow.as_ref().unwrap();
+    let steps: Vec<&str> = g.steps.iter().map(|s| s.action.as_str()).collect();
+    assert_eq!(
+        grown.hotspots.len(),
+        truth.hotspots.len(),
+        "{name}: hot spots grown; steps {steps:?}"
+    );
+    assert_eq!(
+        grown.inversion.is_some(),
+        truth.inversion.is_some(),
+        "{name}: inversion grown; steps {steps:?}"
+    );
+    assert_eq!(
+        grown.background, truth.background,
+        "{name}: background kept"
+    );
+    for t in &truth.hotspots {
+        // The grown spot nearest to this true one.
+        let err = grown
+            .hotspots
+            .iter()
+            .map(|h| (h.x - t.x).hypot(h.z - t.z))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            err <= 0.4 * t.radius,
+            "{name}: centre off by {err:.2} m, {:.3} of the radius",
+            err / t.radius
+        );
+    }
+    if let (Some(t), Some(i)) = (truth.inversion, grown.inversion) {
+        let rel = (i.height - t.height).abs() / t.height;
+        assert!(rel <= 0.1, "{name}: inversion height off by {rel:.3}");
+    }
+    let f_true = objective_at(&problem, &truth);
+    let f = report.totals.objective;
+    assert!(
+        f <= 2.0 * f_true,
+        "{name}: F {f:.4e} against the truth's {f_true:.4e}"
+    );
+    assert_eq!(g.at_noise_floor, Some(true), "{name}: {}", g.stop_reason);
+    eprintln!(
+        "{name}: steps {steps:?}, F/F_true = {:.3}, {} fits, {:.2} s",
+        f / f_true,
+        g.fits,
+        g.wall_time_s
+    );
+}
+
+#[test]
+fn no_term_is_added_to_air_that_has_none() {
+    grows_the_truth("none");
+}
+
+#[test]
+fn an_inversion_is_found() {
+    grows_the_truth("inversion");
+}
+
+#[test]
+fn one_hot_spot_is_found() {
+    grows_the_truth("one-hot-spot");
+}
+
+#[test]
+fn two_hot_spots_are_found() {
+    grows_the_truth("two-hot-spots");
+}
+
+#[test]
+fn the_bundled_examples_are_the_generators_output() {
+    // Each file holds the generator's pairs (targets aside) and settings, and
+    // its targets lie within 6σ of the truth's endpoints.
+    for ex in &EXAMPLES {
+        let problem = Problem::load(&file_of(ex.name)).unwrap();
+        assert!(!problem.description.is_empty());
+        let made = pairs();
+        assert_eq!(problem.pairs.len(), made.len());
+        let truth = Medium::Logistic(medium(ex.truth));
+        let traced = mirage::evaluate::trace_pairs(&problem, &truth);
+        for (p, (q, r)) in problem.pairs.iter().zip(made.iter().zip(&traced.pairs)) {
+            assert_eq!((p.origin, p.through), (q.origin, q.through));
+            assert!(
+                r.distance < 6.0 * ex.noise * 2f64.sqrt(),
+                "{}: {}",
+                ex.name,
+                r.distance
+            );
+        }
+        let g = problem.solver.grow.unwrap();
+        assert_eq!(g.noise, Some(ex.noise));
+    }
+}
+
+/// `mirage --threads N fit --grow`'s result file.
+fn grown_on(threads: &str, dir: &Path) -> Value {
+    let out = dir.join(format!("fit-{threads}.json"));
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .args([
+            "--threads",
+            threads,
+            "fit",
+            "-q",
+            "--grow",
+            "--noise",
+            "0.008",
+        ])
+        .arg(file_of("one-hot-spot"))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap()
+}
+
+#[test]
+fn the_grown_model_does_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let (one, two) = (grown_on("1", dir.path()), grown_on("2", dir.path()));
+    let bytes = |v: &Value| serde_json::to_string(&v["medium"]).unwrap();
+    assert_eq!(bytes(&one), bytes(&two), "the medium, byte for byte");
+    let objectives = |v: &Value| {
+        v["grow"]["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["objective"].as_f64().unwrap().to_bits())
+            .collect::<Vec<u64>>()
+    };
+    assert_eq!(
+        objectives(&one),
+        objectives(&two),
+        "every step's F, bit for bit"
+    );
+    assert_eq!(one["grow"]["steps"].as_array().unwrap().len(), 2);
+}

@@ -79,6 +79,7 @@ fn max_terms(s: &str) -> std::result::Result<usize, ValueError> {
 /// the combination: `--noise` and `--max-terms` only with growth (`--grow` or
 /// `solver.grow`), growth not with Nelder–Mead.
 fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result<()> {
+    let unsupported = crate::fit::grow::unsupported(&problem.medium);
     let solver = &mut problem.solver;
     if let Some(m) = options.method {
         solver.method = m;
@@ -112,6 +113,9 @@ fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result<()> {
             flag,
             "growing fits every candidate with Levenberg–Marquardt: use --method lm or auto, not nelder-mead",
         ));
+    }
+    if let Some(why) = unsupported {
+        return Err(Error::usage("--grow", why));
     }
     let file = solver.grow.unwrap_or(crate::problem::GrowSettings {
         noise: None,

@@ -207,6 +207,11 @@ impl Problem {
         let (mut trace, trace_spec) = trace_options(&file.trace, path)?;
         trace.earth = earth;
         let solver = solver_settings(&file.solver, path)?;
+        if solver.grow.is_some()
+            && let Some(why) = crate::fit::grow::unsupported(&file.medium)
+        {
+            return Err(bad("solver.grow".into(), why));
+        }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())

@@ -251,32 +251,37 @@ fn step_record(
     }
 }
 
-/// The starting model of `problem`: its medium, which must be the logistic
-/// model with at least one term, and its free parameters.
+/// Why `medium` cannot be grown, if it cannot: growing adds terms of the
+/// logistic model, scaled against the terms already there.
+pub fn unsupported(medium: &Medium) -> Option<String> {
+    match medium {
+        Medium::Logistic(m) if m.amplitude_sum() > 0.0 => None,
+        Medium::Logistic(_) => Some(
+            "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it"
+                .into(),
+        ),
+        other => Some(format!(
+            "growing adds terms of the logistic model (an inversion, hot spots); this medium is the {} model",
+            other.kind_name()
+        )),
+    }
+}
+
+/// The starting model of `problem`: its medium and free parameters.
 fn start_model(problem: &Problem) -> Result<Model> {
-    let Medium::Logistic(medium) = &problem.medium else {
-        return Err(Error::input(
+    match (&problem.medium, unsupported(&problem.medium)) {
+        (Medium::Logistic(medium), None) => Ok(Model {
+            medium: medium.clone(),
+            free: problem.free.clone(),
+            bounds: problem.bounds.clone(),
+            grown: vec![],
+        }),
+        (_, reason) => Err(Error::input(
             &problem.source,
             "solver.grow",
-            format!(
-                "growing adds terms of the logistic model; this medium is the {} model",
-                problem.medium.kind_name()
-            ),
-        ));
-    };
-    if medium.amplitude_sum() <= 0.0 {
-        return Err(Error::input(
-            &problem.source,
-            "medium",
-            "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it",
-        ));
+            reason.unwrap_or_default(),
+        )),
     }
-    Ok(Model {
-        medium: medium.clone(),
-        free: problem.free.clone(),
-        bounds: problem.bounds.clone(),
-        grown: vec![],
-    })
 }
 
 /// Grows `problem`'s model as `settings` say (see the module doc).
