@@ -269,6 +269,13 @@ fn the_bundled_examples_are_the_generators_output() {
         let g = problem.solver.grow.unwrap();
         assert_eq!(g.noise, Some(ex.noise));
     }
+    // `measure.py` reads the truths from `truths.json`: the same as here.
+    let text = std::fs::read_to_string(root().join("problems/grow/truths.json")).unwrap();
+    let truths: Value = serde_json::from_str(&text).unwrap();
+    for ex in &EXAMPLES {
+        let listed: LogisticMedium = serde_json::from_value(truths[ex.name].clone()).unwrap();
+        assert_eq!(listed, medium(ex.truth), "{}", ex.name);
+    }
 }
 
 /// `mirage --threads N fit --grow`'s result file.

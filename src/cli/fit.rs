@@ -186,7 +186,10 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         write_json(out, &report)?;
     }
     if let Some(plot) = &options.plot {
-        crate::plot::draw_convergence(&report.history, plot)?;
+        match &report.grow {
+            Some(g) => crate::plot::draw_grow(&report.history, g, plot)?,
+            None => crate::plot::draw_convergence(&report.history, plot)?,
+        }
     }
     if let Some(rays) = &options.rays {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;

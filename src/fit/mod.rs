@@ -27,8 +27,9 @@ use std::time::Instant;
 /// asks of a result. `hook` sees every iterate (progress display, tests).
 ///
 /// With `solver.grow` set the model is grown first ([`grow`]), and the result
-/// is the fit of the grown model, polished by LM from the grown values, with
-/// the account of the growth in its `grow` section.
+/// is the fit of the grown model from its kept seed
+/// ([`grow::grown_problem`]), with the account of the growth in its `grow`
+/// section.
 pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
     let Some(settings) = problem.solver.grow else {
         return fit_as_is(problem, hook);

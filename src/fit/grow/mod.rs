@@ -113,6 +113,8 @@ impl Criterion {
 pub struct Fitted {
     /// The model at its fitted values.
     pub model: Model,
+    /// The model the fit started from (its seed).
+    pub start: Model,
     /// F (m²).
     pub objective: f64,
     /// The criterion.
@@ -162,6 +164,7 @@ fn fit_model(
     };
     let f = if f.is_finite() { f } else { f64::INFINITY };
     Ok(Fitted {
+        start: model.clone(),
         model: model.at(&x),
         objective: f,
         criterion: criterion.value(f, model.free.len()),
@@ -410,10 +413,13 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
     })
 }
 
-/// The problem whose fit is the grown model: its medium and free parameters,
-/// fitted from the grown values by Levenberg–Marquardt alone (a polish).
+/// The problem whose fit is the grown model: its terms and free parameters,
+/// started from the seed the kept fit started from, fitted by
+/// Levenberg–Marquardt alone. That repeats the kept fit (deterministic, and
+/// with at least its iterations), so the result's history and convergence
+/// plot show the fit from its seed.
 pub fn grown_problem(problem: &Problem, grown: &Grown) -> Problem {
-    let model = &grown.fitted.model;
+    let model = &grown.fitted.start;
     let mut p = problem.clone();
     p.medium = Medium::Logistic(model.medium.clone());
     p.free = model.free.clone();
