@@ -117,10 +117,7 @@ impl GrowFigure {
             let (cx, cy) = px(*p);
             let style = text(TICK_SIZE, INK).pos(Pos::new(HPos::Left, VPos::Bottom));
             draw_label(&pixels, &s.action, (cx + 8, cy - 6), &style, mode)?;
-            let chi2 = s
-                .chi2
-                .map(|c| format!("χ² = {c:.1}, "))
-                .unwrap_or_default();
+            let chi2 = s.chi2.map(|c| format!("χ² = {c:.1}, ")).unwrap_or_default();
             let detail = format!("{chi2}{} free", s.free.len());
             let style = text(TICK_SIZE, MUTED).pos(Pos::new(HPos::Left, VPos::Top));
             draw_label(&pixels, &detail, (cx + 8, cy + 6), &style, mode)?;

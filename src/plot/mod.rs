@@ -30,8 +30,8 @@ mod tests;
 
 pub use air::draw_air;
 pub use convergence::draw_convergence;
-pub use grow::draw_grow;
 pub use figure::ImageFormat;
+pub use grow::draw_grow;
 pub use rays::draw_rays;
 pub use style::ensure_font;
 pub use tradeoff::draw_tradeoff;
