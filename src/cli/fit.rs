@@ -64,7 +64,7 @@ fn noise(s: &str) -> std::result::Result<f64, ValueError> {
     let v: f64 = s.trim().parse().map_err(|_| ValueError::NotANumber {
         value: s.to_string(),
     })?;
-    crate::problem::check_noise(v).map_err(|rule| ValueError::OutOfRange { rule })
+    crate::problem::check_noise(v)
 }
 
 /// `--max-terms`: at least 1.
@@ -72,7 +72,7 @@ fn max_terms(s: &str) -> std::result::Result<usize, ValueError> {
     let v: usize = s.trim().parse().map_err(|_| ValueError::NotAWholeNumber {
         value: s.to_string(),
     })?;
-    crate::problem::check_max_terms(v).map_err(|rule| ValueError::OutOfRange { rule })
+    crate::problem::check_max_terms(v)
 }
 
 /// Applies the flags to the problem's solver settings, in one step, and checks

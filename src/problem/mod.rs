@@ -29,7 +29,7 @@ mod trace;
 
 pub use solver::{
     DEFAULT_MAX_TERMS, DEFAULT_SIMPLEX_FTOL, DEFAULT_SIMPLEX_XTOL, GrowSettings, SolverMethod,
-    SolverSettings, SolverSpec, check_max_terms, check_noise, solver_settings,
+    SolverSettings, SolverSpec, check_max_terms, check_noise, grow_unsupported, solver_settings,
 };
 pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
 
@@ -208,7 +208,7 @@ impl Problem {
         trace.earth = earth;
         let solver = solver_settings(&file.solver, path)?;
         if solver.grow.is_some()
-            && let Some(why) = crate::fit::grow::unsupported(&file.medium)
+            && let Some(why) = grow_unsupported(&file.medium)
         {
             return Err(bad("solver.grow".into(), why));
         }

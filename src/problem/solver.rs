@@ -1,7 +1,8 @@
 //! The `solver` section of a problem: as written ([`SolverSpec`]) and validated
 //! ([`SolverSettings`]), which is what the fit runs with.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, ValueError};
+use crate::medium::Medium;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -150,20 +151,40 @@ pub struct GrowSettings {
 pub const DEFAULT_MAX_TERMS: usize = 4;
 
 /// Checks a noise σ (`solver.noise`, `--noise`): finite and > 0 metres.
-pub fn check_noise(v: f64) -> std::result::Result<f64, String> {
+pub fn check_noise(v: f64) -> std::result::Result<f64, ValueError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(format!("must be a finite number > 0 (metres), got {v}"))
+        Err(ValueError::OutOfRange {
+            rule: format!("must be a finite number > 0 (metres), got {v}"),
+        })
     }
 }
 
 /// Checks a term limit (`solver.max_terms`, `--max-terms`): at least 1.
-pub fn check_max_terms(v: usize) -> std::result::Result<usize, String> {
+pub fn check_max_terms(v: usize) -> std::result::Result<usize, ValueError> {
     if v >= 1 {
         Ok(v)
     } else {
-        Err("must be at least 1 (the number of terms growing may add)".into())
+        Err(ValueError::OutOfRange {
+            rule: "must be at least 1 (the number of terms growing may add)".into(),
+        })
+    }
+}
+
+/// Why `medium` cannot be grown (`crate::fit::grow`), if it cannot: growing
+/// adds terms of the logistic model, scaled against the terms already there.
+pub fn grow_unsupported(medium: &Medium) -> Option<String> {
+    match medium {
+        Medium::Logistic(m) if m.amplitude_sum() > 0.0 => None,
+        Medium::Logistic(_) => Some(
+            "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it"
+                .into(),
+        ),
+        other => Some(format!(
+            "growing adds terms of the logistic model (an inversion, hot spots); this medium is the {} model",
+            other.kind_name()
+        )),
     }
 }
 
@@ -177,12 +198,12 @@ fn grow_settings(
         .noise
         .map(check_noise)
         .transpose()
-        .map_err(|m| Error::input(path, "solver.noise", m))?;
+        .map_err(|e| Error::input(path, "solver.noise", e.to_string()))?;
     let max_terms = spec
         .max_terms
         .map(check_max_terms)
         .transpose()
-        .map_err(|m| Error::input(path, "solver.max_terms", m))?;
+        .map_err(|e| Error::input(path, "solver.max_terms", e.to_string()))?;
     if spec.grow != Some(true) {
         let stray = [
             ("noise", noise.is_some()),

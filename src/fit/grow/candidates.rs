@@ -30,7 +30,7 @@ pub const RADIUS_SHARES: [f64; 2] = [0.1, 0.25];
 
 /// The rim sharpness e (1/m) of a grown hot spot, not fitted: a rim 4/e = 8 m
 /// wide, smooth enough that a seed's rays feel the rim move, and one the
-/// pairs rarely determine (`README.md`, "Growing the model").
+/// pairs rarely determine (see the README, "Growing the model").
 pub const GROWN_EDGE: f64 = 0.5;
 
 /// A term to try, with the models its fits start from.

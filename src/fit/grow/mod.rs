@@ -254,20 +254,10 @@ fn step_record(
     }
 }
 
-/// Why `medium` cannot be grown, if it cannot: growing adds terms of the
-/// logistic model, scaled against the terms already there.
+/// Why `medium` cannot be grown, if it cannot
+/// ([`crate::problem::grow_unsupported`]).
 pub fn unsupported(medium: &Medium) -> Option<String> {
-    match medium {
-        Medium::Logistic(m) if m.amplitude_sum() > 0.0 => None,
-        Medium::Logistic(_) => Some(
-            "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it"
-                .into(),
-        ),
-        other => Some(format!(
-            "growing adds terms of the logistic model (an inversion, hot spots); this medium is the {} model",
-            other.kind_name()
-        )),
-    }
+    crate::problem::grow_unsupported(medium)
 }
 
 /// The starting model of `problem`: its medium and free parameters.
