@@ -720,3 +720,87 @@ fn a_scene_over_a_round_earth_that_is_not_one() {
         assert!(!written, "{earth}: an image was written");
     }
 }
+
+#[test]
+fn bad_growth_settings_are_named() {
+    let grow = |extra: &str| {
+        edit(
+            r#""max_iterations": 50"#,
+            &format!(r#""max_iterations": 50, {extra}"#),
+        )
+    };
+    rejects(
+        &grow(r#""grow": true, "noise": 0"#),
+        &["solver.noise", "> 0"],
+    );
+    rejects(
+        &grow(r#""grow": true, "noise": -0.01"#),
+        &["solver.noise", "> 0"],
+    );
+    rejects(
+        &grow(r#""grow": true, "max_terms": 0"#),
+        &["solver.max_terms", "at least 1"],
+    );
+    rejects(&grow(r#""noise": 0.01"#), &["solver.noise", "grow"]);
+    rejects(
+        &grow(r#""grow": false, "max_terms": 2"#),
+        &["solver.max_terms", "grow"],
+    );
+    rejects(
+        &edit(
+            r#""method": "lm""#,
+            r#""method": "nelder-mead", "grow": true"#,
+        ),
+        &["solver.grow", "nelder-mead"],
+    );
+    rejects(
+        &air(r#"{"air": {"temperature": {"base": 20.0}}}"#).replacen(
+            r#""max_iterations": 50"#,
+            r#""max_iterations": 50, "grow": true"#,
+            1,
+        ),
+        &["solver.grow", "logistic"],
+    );
+}
+
+#[test]
+fn bad_growth_flags_exit_2_naming_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("problem.json");
+    std::fs::write(&input, GOOD).unwrap();
+    let air_input = dir.path().join("air.json");
+    std::fs::write(
+        &air_input,
+        air(r#"{"air": {"temperature": {"base": 20.0}}}"#),
+    )
+    .unwrap();
+    let output = dir.path().join("out.json");
+    let cases: [(&Path, &[&str], &str); 8] = [
+        (&input, &["--grow", "--noise", "0"], "--noise"),
+        (&input, &["--grow", "--noise", "-0.001"], "--noise"),
+        (&input, &["--grow", "--noise", "nan"], "--noise"),
+        (&input, &["--grow", "--max-terms", "0"], "--max-terms"),
+        (&input, &["--noise", "0.01"], "--noise"),
+        (&input, &["--max-terms", "2"], "--max-terms"),
+        (&input, &["--grow", "--method", "nelder-mead"], "--method"),
+        (&air_input, &["--grow"], "--grow"),
+    ];
+    for (file, args, flag) in cases {
+        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+            .arg("fit")
+            .arg(file)
+            .args(args)
+            .arg("-o")
+            .arg(&output)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(flag),
+            "{args:?}: {flag} not named: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!output.exists(), "{args:?}: an output was written");
+    }
+}

@@ -40,9 +40,92 @@ pub struct FitOptions {
     /// `solver.target_objective`): the fit exits with code 1 if it ends above it.
     #[arg(long, allow_negative_numbers = true, value_parser = target_objective)]
     pub target_objective: Option<f64>,
+    /// Grow the model: from the problem's medium (a background alone, say),
+    /// add the terms the pairs call for (an inversion, hot spots), one at a
+    /// time, while they lower the information criterion (BIC).
+    #[arg(long)]
+    pub grow: bool,
+    /// Endpoint noise σ in metres, finite > 0, that growing assumes (per
+    /// residual component; overrides `solver.noise`); without it σ is
+    /// estimated from the residuals. Only with --grow.
+    #[arg(long, allow_negative_numbers = true, value_parser = noise)]
+    pub noise: Option<f64>,
+    /// Most terms growing may add, ≥ 1 (overrides `solver.max_terms`;
+    /// default 4). Only with --grow.
+    #[arg(long, value_parser = max_terms)]
+    pub max_terms: Option<usize>,
     /// No progress line.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `--noise`: a finite σ > 0 (m).
+fn noise(s: &str) -> std::result::Result<f64, ValueError> {
+    let v: f64 = s.trim().parse().map_err(|_| ValueError::NotANumber {
+        value: s.to_string(),
+    })?;
+    crate::problem::check_noise(v)
+}
+
+/// `--max-terms`: at least 1.
+fn max_terms(s: &str) -> std::result::Result<usize, ValueError> {
+    let v: usize = s.trim().parse().map_err(|_| ValueError::NotAWholeNumber {
+        value: s.to_string(),
+    })?;
+    crate::problem::check_max_terms(v)
+}
+
+/// Applies the flags to the problem's solver settings, in one step, and checks
+/// the combination: `--noise` and `--max-terms` only with growth (`--grow` or
+/// `solver.grow`), growth not with Nelder–Mead.
+fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result<()> {
+    let unsupported = crate::fit::grow::unsupported(&problem.medium);
+    let solver = &mut problem.solver;
+    if let Some(m) = options.method {
+        solver.method = m;
+    }
+    if let Some(t) = options.target_objective {
+        solver.target_objective = t;
+        solver.target_enforced = true;
+    }
+    let grows = options.grow || solver.grow.is_some();
+    for (flag, set) in [
+        ("--noise", options.noise.is_some()),
+        ("--max-terms", options.max_terms.is_some()),
+    ] {
+        if set && !grows {
+            return Err(Error::usage(
+                flag,
+                "applies only when the model is grown: add --grow (or `\"grow\": true` to the problem's `solver`)",
+            ));
+        }
+    }
+    if !grows {
+        return Ok(());
+    }
+    if solver.method == SolverMethod::NelderMead {
+        let flag = if options.method.is_some() {
+            "--method"
+        } else {
+            "--grow"
+        };
+        return Err(Error::usage(
+            flag,
+            "growing fits every candidate with Levenberg–Marquardt: use --method lm or auto, not nelder-mead",
+        ));
+    }
+    if let Some(why) = unsupported {
+        return Err(Error::usage("--grow", why));
+    }
+    let file = solver.grow.unwrap_or(crate::problem::GrowSettings {
+        noise: None,
+        max_terms: crate::problem::DEFAULT_MAX_TERMS,
+    });
+    solver.grow = Some(crate::problem::GrowSettings {
+        noise: options.noise.or(file.noise),
+        max_terms: options.max_terms.unwrap_or(file.max_terms),
+    });
+    Ok(())
 }
 
 /// `--target-objective`: a finite F ≥ 0 (m²).
@@ -66,13 +149,7 @@ fn target_objective(s: &str) -> std::result::Result<f64, ValueError> {
 pub fn run(options: &FitOptions) -> Result<FitReport> {
     let problem_path = options.problem.as_path();
     let mut problem = Problem::load(problem_path)?;
-    if let Some(m) = options.method {
-        problem.solver.method = m;
-    }
-    if let Some(t) = options.target_objective {
-        problem.solver.target_objective = t;
-        problem.solver.target_enforced = true;
-    }
+    apply_flags(options, &mut problem)?;
     check_outputs(
         [
             Output::optional("-o", options.output.as_ref(), OutputKind::Any),
@@ -109,7 +186,10 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         write_json(out, &report)?;
     }
     if let Some(plot) = &options.plot {
-        crate::plot::draw_convergence(&report.history, plot)?;
+        match &report.grow {
+            Some(g) => crate::plot::draw_grow(&report.history, g, plot)?,
+            None => crate::plot::draw_convergence(&report.history, plot)?,
+        }
     }
     if let Some(rays) = &options.rays {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;
@@ -225,5 +305,44 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
     if !flagged.is_empty() {
         let _ = writeln!(s, "flags: {}", flagged.join(", "));
     }
+    if let Some(g) = &r.grow {
+        s.push_str(&grow_summary(g));
+    }
+    s
+}
+
+/// The sequence of a grown model: one line per step.
+pub fn grow_summary(g: &crate::fit::grow::GrowReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "grown ({}; m = {} residual components; {} fits, {:.3} s):",
+        g.criterion, g.residual_components, g.fits, g.wall_time_s
+    );
+    for st in &g.steps {
+        let chi2 = st
+            .chi2
+            .map(|c| format!("  χ² = {c:.1}"))
+            .unwrap_or_default();
+        let _ = writeln!(
+            s,
+            "  step {:>2}  {:<34} F = {:.4e} m²{}  criterion = {:.2}  [{}; {} free]",
+            st.step,
+            st.action,
+            st.objective,
+            chi2,
+            st.criterion,
+            st.terms.join(", "),
+            st.free.len()
+        );
+        for c in &st.candidates {
+            let _ = writeln!(
+                s,
+                "           tried {:<13} best of {} seeds: F = {:.4e} m², criterion = {:.2}",
+                c.term, c.seeds, c.objective, c.criterion
+            );
+        }
+    }
+    let _ = writeln!(s, "stopped growing: {}", g.stop_reason);
     s
 }

@@ -3,6 +3,7 @@
 //! solvers ([`lm`], [`nelder_mead`]), the strategies that run them
 //! ([`solve`]), and what the pairs cannot determine ([`identify`]).
 
+pub mod grow;
 pub mod history;
 pub mod identify;
 pub mod lm;
@@ -24,7 +25,23 @@ use std::time::Instant;
 
 /// Fits `problem`'s free parameters and reports everything `docs/problem-format.md`
 /// asks of a result. `hook` sees every iterate (progress display, tests).
+///
+/// With `solver.grow` set the model is grown first ([`grow`]), and the result
+/// is the fit of the grown model from its kept seed
+/// ([`grow::grown_problem`]), with the account of the growth in its `grow`
+/// section.
 pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
+    let Some(settings) = problem.solver.grow else {
+        return fit_as_is(problem, hook);
+    };
+    let grown = grow::grow(problem, &settings)?;
+    let mut report = fit_as_is(&grow::grown_problem(problem, &grown), hook)?;
+    report.grow = Some(grown.report);
+    Ok(report)
+}
+
+/// Fits the problem's medium as it is (no growth).
+fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
     let started = Instant::now();
     let objective = Objective::from_problem(problem);
     let settings = &problem.solver;
@@ -106,6 +123,7 @@ pub fn fit(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> {
         },
         trace: problem.trace_spec.clone(),
         implied_air,
+        grow: None,
     };
     Ok(report)
 }

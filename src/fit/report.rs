@@ -109,4 +109,7 @@ pub struct FitReport {
     /// (`crate::profile`, as `mirage air` reports it), in brief.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub implied_air: Option<crate::profile::ImpliedAirSummary>,
+    /// How the model was grown (`mirage fit --grow`), step by step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grow: Option<crate::fit::grow::GrowReport>,
 }

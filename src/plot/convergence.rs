@@ -53,7 +53,7 @@ struct RunView {
     final_objective: Option<f64>,
 }
 
-struct ConvergenceFigure {
+pub(super) struct ConvergenceFigure {
     runs: Vec<RunView>,
     names: Vec<String>,
     /// Final values of the best run, for the legend.
@@ -69,7 +69,7 @@ struct ConvergenceFigure {
 }
 
 impl ConvergenceFigure {
-    fn new(history: &History) -> ConvergenceFigure {
+    pub(super) fn new(history: &History) -> ConvergenceFigure {
         let records = || history.runs.iter().flat_map(|r| r.records.iter());
         let min_positive = records()
             .map(|r| r.objective)

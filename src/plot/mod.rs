@@ -4,6 +4,7 @@
 //!   beside the refractivity profile δ(y)).
 //! - [`draw_air`]: a medium's T, P, n − 1 and dn/dh against height (`mirage air`).
 //! - [`draw_convergence`]: how a fit's objective and parameters moved.
+//! - [`draw_grow`]: the same for a grown fit, beside the criterion per step.
 //! - [`draw_tradeoff`]: the speed/accuracy trade of the integrators.
 //!
 //! Text is drawn with an embedded DejaVu Sans ([`ensure_font`]), so plotting
@@ -16,6 +17,7 @@ mod air;
 mod axes;
 mod convergence;
 mod figure;
+mod grow;
 mod legend;
 mod marker;
 mod rays;
@@ -29,6 +31,7 @@ mod tests;
 pub use air::draw_air;
 pub use convergence::draw_convergence;
 pub use figure::ImageFormat;
+pub use grow::draw_grow;
 pub use rays::draw_rays;
 pub use style::ensure_font;
 pub use tradeoff::draw_tradeoff;

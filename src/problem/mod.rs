@@ -22,14 +22,14 @@
 //! | `bounds` | optional `[low, high]` per free parameter |
 //! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight`, optional `wavelength` (nm, real air only: the pair is traced with `air.wavelength` replaced by it) |
 //! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
-//! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12), `simplex_xtol`, `simplex_ftol` |
+//! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12), `simplex_xtol`, `simplex_ftol`; `grow`, `noise`, `max_terms` (`crate::fit::grow`) |
 
 mod solver;
 mod trace;
 
 pub use solver::{
-    DEFAULT_SIMPLEX_FTOL, DEFAULT_SIMPLEX_XTOL, SolverMethod, SolverSettings, SolverSpec,
-    solver_settings,
+    DEFAULT_MAX_TERMS, DEFAULT_SIMPLEX_FTOL, DEFAULT_SIMPLEX_XTOL, GrowSettings, SolverMethod,
+    SolverSettings, SolverSpec, check_max_terms, check_noise, grow_unsupported, solver_settings,
 };
 pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
 
@@ -207,6 +207,11 @@ impl Problem {
         let (mut trace, trace_spec) = trace_options(&file.trace, path)?;
         trace.earth = earth;
         let solver = solver_settings(&file.solver, path)?;
+        if solver.grow.is_some()
+            && let Some(why) = grow_unsupported(&file.medium)
+        {
+            return Err(bad("solver.grow".into(), why));
+        }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())

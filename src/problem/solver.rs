@@ -1,7 +1,8 @@
 //! The `solver` section of a problem: as written ([`SolverSpec`]) and validated
 //! ([`SolverSettings`]), which is what the fit runs with.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, ValueError};
+use crate::medium::Medium;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -42,6 +43,17 @@ pub struct SolverSpec {
     /// Relative spread of F over the simplex below which Nelder–Mead stops.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simplex_ftol: Option<f64>,
+    /// Grow the model (`mirage fit --grow`, `crate::fit::grow`): add the terms
+    /// the pairs call for, one at a time, instead of fitting the medium as is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grow: Option<bool>,
+    /// Endpoint noise σ (metres, per residual component) that the grown
+    /// model's criterion assumes; absent: estimated from the residuals.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+    /// Most terms growing may add (default [`DEFAULT_MAX_TERMS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_terms: Option<usize>,
 }
 
 fn default_solver() -> String {
@@ -61,6 +73,9 @@ impl Default for SolverSpec {
             target_objective: None,
             simplex_xtol: None,
             simplex_ftol: None,
+            grow: None,
+            noise: None,
+            max_terms: None,
         }
     }
 }
@@ -119,6 +134,101 @@ pub struct SolverSettings {
     /// Nelder–Mead stops when F differs over the simplex by less than this
     /// times F.
     pub simplex_ftol: f64,
+    /// Grow the model instead of fitting it as is (`crate::fit::grow`).
+    pub grow: Option<GrowSettings>,
+}
+
+/// Validated settings of `mirage fit --grow` (`solver.grow`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GrowSettings {
+    /// Endpoint noise σ (m per residual component); `None`: estimated.
+    pub noise: Option<f64>,
+    /// Most terms to add.
+    pub max_terms: usize,
+}
+
+/// Default of `solver.max_terms` / `--max-terms`.
+pub const DEFAULT_MAX_TERMS: usize = 4;
+
+/// Checks a noise σ (`solver.noise`, `--noise`): finite and > 0 metres.
+pub fn check_noise(v: f64) -> std::result::Result<f64, ValueError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(ValueError::OutOfRange {
+            rule: format!("must be a finite number > 0 (metres), got {v}"),
+        })
+    }
+}
+
+/// Checks a term limit (`solver.max_terms`, `--max-terms`): at least 1.
+pub fn check_max_terms(v: usize) -> std::result::Result<usize, ValueError> {
+    if v >= 1 {
+        Ok(v)
+    } else {
+        Err(ValueError::OutOfRange {
+            rule: "must be at least 1 (the number of terms growing may add)".into(),
+        })
+    }
+}
+
+/// Why `medium` cannot be grown (`crate::fit::grow`), if it cannot: growing
+/// adds terms of the logistic model, scaled against the terms already there.
+pub fn grow_unsupported(medium: &Medium) -> Option<String> {
+    match medium {
+        Medium::Logistic(m) if m.amplitude_sum() > 0.0 => None,
+        Medium::Logistic(_) => Some(
+            "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it"
+                .into(),
+        ),
+        other => Some(format!(
+            "growing adds terms of the logistic model (an inversion, hot spots); this medium is the {} model",
+            other.kind_name()
+        )),
+    }
+}
+
+/// Validates the growth fields of a `solver` section against `method`.
+fn grow_settings(
+    spec: &SolverSpec,
+    method: SolverMethod,
+    path: &Path,
+) -> Result<Option<GrowSettings>> {
+    let noise = spec
+        .noise
+        .map(check_noise)
+        .transpose()
+        .map_err(|e| Error::input(path, "solver.noise", e.to_string()))?;
+    let max_terms = spec
+        .max_terms
+        .map(check_max_terms)
+        .transpose()
+        .map_err(|e| Error::input(path, "solver.max_terms", e.to_string()))?;
+    if spec.grow != Some(true) {
+        let stray = [
+            ("noise", noise.is_some()),
+            ("max_terms", max_terms.is_some()),
+        ];
+        if let Some((field, _)) = stray.iter().find(|(_, set)| *set) {
+            return Err(Error::input(
+                path,
+                format!("solver.{field}"),
+                "applies only when the model is grown (`\"grow\": true`)",
+            ));
+        }
+        return Ok(None);
+    }
+    if method == SolverMethod::NelderMead {
+        return Err(Error::input(
+            path,
+            "solver.grow",
+            "growing fits every candidate with Levenberg–Marquardt: use method `lm` or `auto`, not `nelder-mead`",
+        ));
+    }
+    Ok(Some(GrowSettings {
+        noise,
+        max_terms: max_terms.unwrap_or(DEFAULT_MAX_TERMS),
+    }))
 }
 
 /// Default of `simplex_xtol`: the simplex 1e-10 of its starting size, that is
@@ -178,5 +288,6 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         target_enforced: spec.target_objective.is_some(),
         simplex_xtol: tol("simplex_xtol", spec.simplex_xtol, DEFAULT_SIMPLEX_XTOL)?,
         simplex_ftol: tol("simplex_ftol", spec.simplex_ftol, DEFAULT_SIMPLEX_FTOL)?,
+        grow: grow_settings(spec, method, path)?,
     })
 }

@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""Measures `mirage fit --grow` on the bundled examples (README, "Growing the
+model"): for each problem in this folder, the grown terms against the truth in
+truths.json (the air its targets were traced through, as in tests/grow.rs),
+each hot spot's centre error over its radius, the inversion height's error,
+F grown / F true, the steps, and the time to grow (best of --repeat runs) on
+one thread and on two.
+
+    python3 problems/grow/measure.py [--mirage target/release/mirage] [--repeat 3]
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+NAMES = ["none", "inversion", "one-hot-spot", "two-hot-spots"]
+
+
+def terms(m):
+    t = ["inversion"] if "inversion" in m else []
+    n = len(m.get("hotspots", []))
+    if n:
+        t.append(f"{n} hot spot{'s' if n > 1 else ''}")
+    return ", ".join(t) or "none"
+
+
+def run(mirage, args):
+    out = subprocess.run([mirage] + args, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit(out.stderr)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--mirage", default="target/release/mirage")
+    ap.add_argument("--repeat", type=int, default=3)
+    a = ap.parse_args()
+    truths = json.load(open(os.path.join(HERE, "truths.json")))
+    mirage = a.mirage
+    tmp = tempfile.mkdtemp()
+    print("| example | true terms | grown terms | centre error / radius | inversion height error "
+          "| F grown / F true | steps | time, 1 thread | time, 2 threads |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name in NAMES:
+        path = os.path.join(HERE, f"{name}.json")
+        truth = truths[name]
+        # F at the truth: trace the problem with the true medium.
+        p = json.load(open(path))
+        p["medium"] = truth
+        p["solver"] = {"method": "lm"}
+        tp = os.path.join(tmp, f"{name}-truth.json")
+        json.dump(p, open(tp, "w"))
+        run(mirage, ["trace", tp, "-o", os.path.join(tmp, "t.json")])
+        f_true = json.load(open(os.path.join(tmp, "t.json")))["objective"]
+        times = {}
+        for threads in ["1", "2"]:
+            best = math.inf
+            for _ in range(a.repeat):
+                out = os.path.join(tmp, f"{name}-{threads}.json")
+                t0 = time.perf_counter()
+                run(mirage, ["--threads", threads, "fit", "-q", path, "-o", out])
+                best = min(best, time.perf_counter() - t0)
+            times[threads] = best
+        r = json.load(open(out))
+        m = r["medium"]
+        errs = []
+        for h in truth.get("hotspots", []):
+            d = min((math.hypot(g["x"] - h["x"], g["z"] - h["z"]) for g in m.get("hotspots", [])),
+                    default=math.inf)
+            errs.append(f"{d / h['radius']:.3f}")
+        inv = "–"
+        if "inversion" in truth and "inversion" in m:
+            t = truth["inversion"]["height"]
+            inv = f"{abs(m['inversion']['height'] - t) / t * 100:.2f} %"
+        g = r["grow"]
+        steps = " → ".join(s["action"] for s in g["steps"][1:]) or "start only"
+        print(f"| `{name}` | {terms(truth)} | {terms(m)} | {', '.join(errs) or '–'} | {inv} "
+              f"| {r['objective'] / f_true:.3f} | {steps} | {times['1']:.2f} s | {times['2']:.2f} s |")
+
+
+if __name__ == "__main__":
+    main()
