@@ -169,32 +169,71 @@ fn trace(py: Python<'_>, text: &str, path: &str, threads: Option<usize>) -> PyRe
 }
 
 /// Fits a problem: the result as `mirage fit -o` writes it (pretty JSON text).
-/// `method` overrides the problem's `solver.method`.
+/// `method`, `grow`, `noise` and `max_terms` are `mirage fit`'s `--method`,
+/// `--grow`, `--noise` and `--max-terms`, applied and checked by the same
+/// code; errors name the keyword argument.
 #[pyfunction]
-#[pyo3(signature = (text, path, method=None, threads=None))]
+#[pyo3(signature = (text, path, method=None, grow=false, noise=None, max_terms=None, threads=None))]
+#[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
     text: &str,
     path: &str,
     method: Option<&str>,
+    grow: bool,
+    noise: Option<f64>,
+    max_terms: Option<usize>,
     threads: Option<usize>,
 ) -> PyResult<String> {
+    use crate::problem::{SolverMethod, check_max_terms, check_noise};
     let (_, mut problem) = problem_of(text, path).map_err(|e| to_py(py, e))?;
-    if let Some(m) = method {
-        use crate::problem::SolverMethod;
-        let all = [
-            SolverMethod::Lm,
-            SolverMethod::NelderMead,
-            SolverMethod::Auto,
-        ];
-        problem.solver.method = all.into_iter().find(|v| v.name() == m).ok_or_else(|| {
-            argument_error(
-                py,
-                "method",
-                format!("must be `lm`, `nelder-mead` or `auto`, got `{m}`"),
-            )
-        })?;
-    }
+    let method = match method {
+        None => None,
+        Some(m) => Some(
+            [
+                SolverMethod::Lm,
+                SolverMethod::NelderMead,
+                SolverMethod::Auto,
+            ]
+            .into_iter()
+            .find(|v| v.name() == m)
+            .ok_or_else(|| {
+                argument_error(
+                    py,
+                    "method",
+                    format!("must be `lm`, `nelder-mead` or `auto`, got `{m}`"),
+                )
+            })?,
+        ),
+    };
+    let noise = noise
+        .map(check_noise)
+        .transpose()
+        .map_err(|e| argument_error(py, "noise", e.to_string()))?;
+    let max_terms = max_terms
+        .map(check_max_terms)
+        .transpose()
+        .map_err(|e| argument_error(py, "max_terms", e.to_string()))?;
+    let options = crate::cli::fit::FitOptions {
+        method,
+        grow,
+        noise,
+        max_terms,
+        ..Default::default()
+    };
+    crate::cli::fit::apply_flags(&options, &mut problem).map_err(|e| {
+        // The CLI's flags are this function's keyword arguments.
+        let e = match e {
+            Error::Usage { flag, message } => Error::Usage {
+                flag: flag.trim_start_matches('-').replace('-', "_"),
+                message: message
+                    .replace("--grow", "grow=True")
+                    .replace("--method", "method="),
+            },
+            e => e,
+        };
+        to_py(py, e)
+    })?;
     let report = run(py, threads, move || crate::fit::fit(&problem, None))?;
     let report = report.map_err(|e| to_py(py, e))?;
     serde_json::to_string_pretty(&report)

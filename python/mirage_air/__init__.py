@@ -210,7 +210,9 @@ class FitResult:
     ``standard_errors``: by parameter path (``None`` where the pairs do not
     determine it); ``objective``: F (m²); ``history``: the iterations;
     ``undetermined``: parameter combinations the pairs cannot determine;
-    ``report``: the whole result."""
+    ``grow``: what growing the model did (each step's terms, F, criterion,
+    and why it stopped), ``None`` for a plain fit; ``report``: the whole
+    result."""
 
     medium: Dict[str, Any]
     values: Dict[str, float]
@@ -218,6 +220,7 @@ class FitResult:
     objective: float
     history: History
     undetermined: List[Dict[str, Any]]
+    grow: Optional[Dict[str, Any]]
     report: Dict[str, Any] = field(repr=False)
     _json: str = field(repr=False, default="")
 
@@ -246,6 +249,7 @@ class FitResult:
             objective=float(r["objective"]),
             history=history,
             undetermined=r["undetermined"],
+            grow=r.get("grow"),
             report=r,
             _json=text + "\n",
         )
@@ -259,13 +263,23 @@ def trace(problem: Source, threads: Optional[int] = None) -> TraceResult:
     return TraceResult._of(json.loads(_native.trace(p._text, p.path, threads)))
 
 
-def fit(problem: Source, method: Optional[str] = None, threads: Optional[int] = None) -> FitResult:
+def fit(
+    problem: Source,
+    method: Optional[str] = None,
+    grow: bool = False,
+    noise: Optional[float] = None,
+    max_terms: Optional[int] = None,
+    threads: Optional[int] = None,
+) -> FitResult:
     """Fits a problem's free parameters, as ``mirage fit`` does (the same
     numbers bit for bit). ``method``: ``"lm"``, ``"nelder-mead"`` or
-    ``"auto"``, overriding the problem's ``solver.method``; ``threads``:
-    worker threads (default: all cores); the result does not depend on it."""
+    ``"auto"``, overriding the problem's ``solver.method``. ``grow=True``
+    grows the model term by term from the problem's medium (``mirage fit
+    --grow``), assuming endpoint noise ``noise`` (metres; default: estimated)
+    and adding at most ``max_terms`` terms. ``threads``: worker threads
+    (default: all cores); the result does not depend on it."""
     p = _problem(problem)
-    return FitResult._of(_native.fit(p._text, p.path, method, threads))
+    return FitResult._of(_native.fit(p._text, p.path, method, grow, noise, max_terms, threads))
 
 
 def render(

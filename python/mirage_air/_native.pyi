@@ -13,7 +13,15 @@ class InputError(ValueError):
 
 def load(kind: str, text: str, path: str) -> str: ...
 def trace(text: str, path: str, threads: Optional[int] = None) -> str: ...
-def fit(text: str, path: str, method: Optional[str] = None, threads: Optional[int] = None) -> str: ...
+def fit(
+    text: str,
+    path: str,
+    method: Optional[str] = None,
+    grow: bool = False,
+    noise: Optional[float] = None,
+    max_terms: Optional[int] = None,
+    threads: Optional[int] = None,
+) -> str: ...
 def render(
     text: str,
     path: str,

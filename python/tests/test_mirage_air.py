@@ -105,6 +105,27 @@ def test_fit_equals_the_cli_bit_for_bit(name, tmp_path):
     assert h.objective[-1] >= got.objective or np.isclose(h.objective[-1], got.objective)
 
 
+@needs_cli
+def test_grow_equals_the_cli(tmp_path):
+    path = ROOT / "problems" / "grow" / "one-hot-spot.json"
+    out = tmp_path / "grow.json"
+    cli("--threads", "1", "fit", path, "--grow", "--noise", "0.01", "-o", out, "-q")
+    ref = json.loads(out.read_text())
+    got = mirage_air.fit(path, grow=True, noise=0.01, threads=1)
+    assert json.dumps(got.medium, sort_keys=True) == json.dumps(ref["medium"], sort_keys=True)
+    assert len(got.medium["hotspots"]) == 1 and "inversion" not in got.medium
+    assert got.grow is not None and len(got.grow["steps"]) == len(ref["grow"]["steps"])
+    # The bundled growth problems say `"grow": true`; a plain problem does not.
+    plain = ROOT / "problems" / "hot-road.json"
+    assert mirage_air.fit(plain, threads=1).grow is None
+    for kwargs, name in [({"noise": 0.01}, "noise"), ({"grow": True, "noise": -1.0}, "noise"),
+                         ({"grow": True, "max_terms": 0}, "max_terms"),
+                         ({"grow": True, "method": "nelder-mead"}, "method")]:
+        with pytest.raises(InputError) as e:
+            mirage_air.fit(plain, **kwargs)
+        assert e.value.field == name, (kwargs, e.value.field, str(e.value))
+
+
 def test_fit_from_a_dict_recovers_the_hot_road_and_is_thread_independent():
     doc = json.loads((ROOT / "problems" / "hot-road.json").read_text())
     one = mirage_air.fit(doc, threads=1)

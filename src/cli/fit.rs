@@ -78,7 +78,7 @@ fn max_terms(s: &str) -> std::result::Result<usize, ValueError> {
 /// Applies the flags to the problem's solver settings, in one step, and checks
 /// the combination: `--noise` and `--max-terms` only with growth (`--grow` or
 /// `solver.grow`), growth not with Nelder–Mead.
-fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result<()> {
+pub(crate) fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result<()> {
     let unsupported = crate::fit::grow::unsupported(&problem.medium);
     let solver = &mut problem.solver;
     if let Some(m) = options.method {
