@@ -19,6 +19,7 @@ pub mod plot;
 pub mod preview;
 pub mod problem;
 pub mod profile;
+pub mod refraction;
 pub mod render;
 pub mod scene;
 pub mod trace;

@@ -3,6 +3,8 @@
 //! - [`draw_rays`]: the ray diagram of a problem (side view of every pair's ray
 //!   beside the refractivity profile δ(y)).
 //! - [`draw_air`]: a medium's T, P, n − 1 and dn/dh against height (`mirage air`).
+//! - [`draw_refraction`]: refraction against apparent elevation, with
+//!   Bennett's formula and the dip (`mirage refraction`).
 //! - [`draw_convergence`]: how a fit's objective and parameters moved.
 //! - [`draw_tradeoff`]: the speed/accuracy trade of the integrators.
 //!
@@ -19,6 +21,7 @@ mod figure;
 mod legend;
 mod marker;
 mod rays;
+mod refraction;
 mod style;
 mod text;
 mod tradeoff;
@@ -30,5 +33,6 @@ pub use air::draw_air;
 pub use convergence::draw_convergence;
 pub use figure::ImageFormat;
 pub use rays::draw_rays;
+pub use refraction::draw_refraction;
 pub use style::ensure_font;
 pub use tradeoff::draw_tradeoff;
