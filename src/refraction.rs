@@ -54,7 +54,7 @@
 //! 550 nm) is within 0.1′ at 5° and 10° (0.077′, 0.092′ below it) and gives
 //! 33.0′ at the horizon against Bennett's 34.0′: high up any layered air
 //! refracts by (n₀ − 1)·cot e, and Bennett's constant implies an n₀ − 1
-//! about 3 % above Ciddor's at 550 nm (`README.md`, "Refraction near the
+//! about 3 % above Ciddor's at 550 nm (the repository's README, "Refraction near the
 //! horizon"). Without refraction the dip is acos(R/(R + H)) to 10⁻⁹ rad
 //! (`tests/refraction.rs`).
 
