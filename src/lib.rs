@@ -21,6 +21,7 @@ pub mod problem;
 pub mod profile;
 #[cfg(feature = "python")]
 mod python;
+pub mod refraction;
 pub mod render;
 pub mod scene;
 pub mod trace;

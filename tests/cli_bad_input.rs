@@ -804,3 +804,85 @@ fn bad_growth_flags_exit_2_naming_them() {
         assert!(!output.exists(), "{args:?}: an output was written");
     }
 }
+
+/// Runs `mirage refraction` on `text` with `args` (and `-o`, `--csv`,
+/// `--plot` into a fresh folder), asserts exit code 2, one message holding
+/// every one of `expected`, and no file written.
+fn refraction_rejects(text: &str, args: &[&str], expected: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("air.json");
+    std::fs::write(&input, text).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("refraction")
+        .arg(&input)
+        .args(args)
+        .arg("-o")
+        .arg(dir.path().join("r.json"))
+        .arg("--csv")
+        .arg(dir.path().join("r.csv"))
+        .arg("--plot")
+        .arg(dir.path().join("r.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for e in expected {
+        assert!(stderr.contains(e), "{e:?} missing from: {stderr}");
+    }
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("air.json")]);
+}
+
+#[test]
+fn refraction_refuses_bad_input_by_name() {
+    let good = air(r#"{"air": {"temperature": {"base": 15.0, "lapse": "standard"}}}"#);
+    refraction_rejects(
+        GOOD,
+        &["--height", "2"],
+        &["air.json", "medium", "real air"],
+    );
+    refraction_rejects(&good, &["--height", "-1"], &["--height", "≥ 0"]);
+    refraction_rejects(&good, &["--height", "nan"], &["--height"]);
+    refraction_rejects(&good, &["--height", "90000"], &["--height", "top"]);
+    refraction_rejects(
+        &good,
+        &["--height", "2", "--elevations", "0,95"],
+        &["--elevations", "−90…90"],
+    );
+    refraction_rejects(
+        &good,
+        &["--height", "2", "--elevations", "0,x"],
+        &["--elevations"],
+    );
+    refraction_rejects(
+        &good,
+        &["--height", "2", "--earth-radius", "500"],
+        &["--earth-radius", "at least 1000"],
+    );
+    refraction_rejects("{ not json", &["--height", "2"], &["air.json"]);
+    refraction_rejects(
+        &good.replacen(
+            "\"medium\"",
+            "\"earth\": {\"radius\": 10.0},\n  \"medium\"",
+            1,
+        ),
+        &["--height", "2"],
+        &["earth.radius", "at least 1000"],
+    );
+    // A missing file is named.
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nowhere.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("refraction")
+        .arg(&missing)
+        .args(["--height", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("nowhere.json"));
+}

@@ -20,6 +20,7 @@ pub mod fit;
 #[cfg(feature = "preview")]
 pub mod preview;
 pub mod rays;
+pub mod refraction;
 pub mod refractivity;
 pub mod render;
 pub mod sky;
@@ -93,6 +94,8 @@ pub enum Command {
     Refractivity(refractivity::RefractivityOptions),
     /// Write and draw a medium's T, P, n − 1 and dn/dh against height (implied air for a logistic medium).
     Air(air::AirOptions),
+    /// Tabulate the astronomical refraction near the horizon, the dip of the horizon and k, through real air.
+    Refraction(refraction::RefractionOptions),
     /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
     #[cfg(feature = "preview")]
     Preview(preview::PreviewOptions),
@@ -144,6 +147,7 @@ impl Cli {
             Command::Sky(o) => sky::run(o),
             Command::Refractivity(o) => refractivity::run(o).map(|_| ()),
             Command::Air(o) => air::run(o).map(|_| ()),
+            Command::Refraction(o) => refraction::run(o).map(|_| ()),
             #[cfg(feature = "preview")]
             Command::Preview(o) => preview::run(o),
         }

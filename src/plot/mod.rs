@@ -3,6 +3,8 @@
 //! - [`draw_rays`]: the ray diagram of a problem (side view of every pair's ray
 //!   beside the refractivity profile δ(y)).
 //! - [`draw_air`]: a medium's T, P, n − 1 and dn/dh against height (`mirage air`).
+//! - [`draw_refraction`]: refraction against apparent elevation, with
+//!   Bennett's formula and the dip (`mirage refraction`).
 //! - [`draw_convergence`]: how a fit's objective and parameters moved.
 //! - [`draw_grow`]: the same for a grown fit, beside the criterion per step.
 //! - [`draw_tradeoff`]: the speed/accuracy trade of the integrators.
@@ -21,6 +23,7 @@ mod grow;
 mod legend;
 mod marker;
 mod rays;
+mod refraction;
 mod style;
 mod text;
 mod tradeoff;
@@ -33,5 +36,6 @@ pub use convergence::draw_convergence;
 pub use figure::ImageFormat;
 pub use grow::draw_grow;
 pub use rays::draw_rays;
+pub use refraction::draw_refraction;
 pub use style::ensure_font;
 pub use tradeoff::draw_tradeoff;

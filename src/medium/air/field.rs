@@ -132,6 +132,8 @@ pub struct AirField<T = f64> {
     co2: T,
     hotspots: Vec<HotTerm<T>>,
     ceiling: f64,
+    /// The top of the described air (m): see [`AirField::top`].
+    top: f64,
     /// The thin layers as height zones `(lo, hi, scale)`: outside them the
     /// layer's share of T is below 1e-13 of its amplitude.
     zones: Vec<(f64, f64, f64)>,
@@ -161,9 +163,9 @@ impl<T: Real> AirField<T> {
                     .map(|i| (i.delta, i.height, i.thickness.recip())),
             },
         };
+        let top = table_top(m);
         let pressure = if m.air.hydrostatic {
             let scales = feature_scales(m);
-            let top = table_top(m);
             let p = profile.clone();
             Pressure::Hydrostatic(Hydrostatic::new(
                 m.air.pressure,
@@ -198,6 +200,7 @@ impl<T: Real> AirField<T> {
             co2: m.air.co2,
             hotspots,
             ceiling,
+            top,
             zones,
         }
     }
@@ -206,6 +209,15 @@ impl<T: Real> AirField<T> {
     /// (infinite when it never is): the tracers stop rays there.
     pub fn ceiling(&self) -> f64 {
         self.ceiling
+    }
+
+    /// The top of the air this medium describes (m): 86 km (the US 1976
+    /// layers' top), or higher when a table's last row or an inversion
+    /// reaches higher. The hydrostatic pressure is tabulated up to it; above
+    /// it the air is held isothermal at its temperature there. `mirage
+    /// refraction` traces rays out of the atmosphere to it.
+    pub fn top(&self) -> f64 {
+        self.top
     }
 
     /// The horizontally uniform temperature (K) and its height derivative at h.
