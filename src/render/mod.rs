@@ -126,6 +126,16 @@ pub struct RenderStats {
     pub glare: Option<glare::GlareStats>,
 }
 
+impl RenderStats {
+    /// Adds `other`'s work counters (samples, march and shadow work) to these.
+    fn add_counts(&mut self, other: &RenderStats) {
+        self.samples += other.samples;
+        self.table_samples += other.table_samples;
+        self.march += other.march;
+        self.shadow += other.shadow;
+    }
+}
+
 /// A rendered image: linear HDR RGB, row-major, top row first.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -471,30 +481,40 @@ impl Renderer {
             indicatif::ProgressBar::hidden()
         };
         let start = Instant::now();
-        let tiles: Vec<(Vec<[f32; 3]>, RenderStats)> = (0..n_tiles as u32)
-            .into_par_iter()
-            .map(|t| {
-                let out = self.render_tile(t % tiles_x, t / tiles_x);
-                bar.inc(1);
-                out
+        // Bands of one tile row are written straight into the image, each
+        // band's tiles rendered in parallel: the image is held once (12 bytes
+        // a pixel) plus the bands in flight, not twice as when every tile was
+        // collected first, and the threads still share out single tiles.
+        let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+        let band_stats: Vec<RenderStats> = pixels
+            .par_chunks_mut((TILE * w) as usize)
+            .enumerate()
+            .map(|(ty, band)| {
+                let tiles: Vec<(Vec<[f32; 3]>, RenderStats)> = (0..tiles_x)
+                    .into_par_iter()
+                    .map(|tx| {
+                        let out = self.render_tile(tx, ty as u32);
+                        bar.inc(1);
+                        out
+                    })
+                    .collect();
+                let mut stats = RenderStats::default();
+                for (tx, (tile, s)) in tiles.into_iter().enumerate() {
+                    let x0 = tx as u32 * TILE;
+                    let tw = TILE.min(w - x0);
+                    for (k, px) in tile.into_iter().enumerate() {
+                        let (dx, dy) = (k as u32 % tw, k as u32 / tw);
+                        band[(dy * w + x0 + dx) as usize] = px;
+                    }
+                    stats.add_counts(&s);
+                }
+                stats
             })
             .collect();
         bar.finish_and_clear();
-        let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
         let mut stats = self.setup;
-        for (t, (tile, s)) in tiles.into_iter().enumerate() {
-            let (tx, ty) = (t as u32 % tiles_x, t as u32 / tiles_x);
-            let x0 = tx * TILE;
-            let y0 = ty * TILE;
-            let tw = TILE.min(w - x0);
-            for (k, px) in tile.into_iter().enumerate() {
-                let (dx, dy) = (k as u32 % tw, k as u32 / tw);
-                pixels[((y0 + dy) * w + x0 + dx) as usize] = px;
-            }
-            stats.samples += s.samples;
-            stats.table_samples += s.table_samples;
-            stats.march += s.march;
-            stats.shadow += s.shadow;
+        for s in &band_stats {
+            stats.add_counts(s);
         }
         stats.trace_seconds = start.elapsed().as_secs_f64();
         let mut image = Rendered {
