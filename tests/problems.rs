@@ -1,5 +1,6 @@
-//! The bundled problems: every file loads, traces, and fits; and a fit's result
-//! does not depend on the number of threads.
+//! The bundled problems: every file loads, traces, and fits; and no command's
+//! output depends on the number of threads (bit for bit, timings aside), for
+//! the logistic model and for real air alike.
 
 use mirage::evaluate::trace_pairs;
 use mirage::problem::Problem;
@@ -64,12 +65,12 @@ fn every_bundled_problem_fits() {
     }
 }
 
-/// Removes the fields that measure time.
+/// Removes the fields that measure time (`wall_time_s`, `elapsed_s`, and
+/// `tradeoff`'s `time_s`, `trace_time_s`, `reference_fit_time_s`).
 fn without_timing(v: &mut serde_json::Value) {
     match v {
         serde_json::Value::Object(m) => {
-            m.remove("wall_time_s");
-            m.remove("elapsed_s");
+            m.retain(|k, _| !k.ends_with("time_s") && k != "elapsed_s");
             m.values_mut().for_each(without_timing);
         }
         serde_json::Value::Array(a) => a.iter_mut().for_each(without_timing),
@@ -205,4 +206,160 @@ fn the_fit_result_holds_what_the_format_promises_and_its_medium_feeds_back() {
     problem["medium"] = v["medium"].clone();
     let p = Problem::parse(&problem.to_string(), Path::new("refit.json")).unwrap();
     assert!(trace_pairs(&p, &p.medium).totals.objective < 1e-12);
+}
+
+/// One command's outputs at `--threads 1` and at `--threads 2`: `args` with
+/// `{out}` replaced by a file in a folder of its own per thread count; the
+/// output files named in `outputs` (JSON compared without its timings, every
+/// other file byte for byte) and, when `stdout` is set, standard output.
+fn same_at_one_and_two_threads(args: &[&str], outputs: &[&str], stdout: bool) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let mut seen: Vec<Vec<(String, Vec<u8>)>> = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(threads);
+        std::fs::create_dir(&out).unwrap();
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| {
+                if let Some(name) = a.strip_prefix("{out}/") {
+                    out.join(name).to_str().unwrap().to_string()
+                } else if a.starts_with("problems/") {
+                    root.join(a).to_str().unwrap().to_string()
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+            .args(["--threads", threads])
+            .args(&args)
+            .output()
+            .unwrap();
+        // `fit` exits 1 when it misses the problem's target; its result is
+        // written all the same, and must be the same.
+        assert!(
+            matches!(run.status.code(), Some(0 | 1)),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mut files = Vec::new();
+        for name in outputs {
+            let bytes =
+                std::fs::read(out.join(name)).unwrap_or_else(|e| panic!("{args:?}: {name}: {e}"));
+            let bytes = if name.ends_with(".json") {
+                let mut v: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                without_timing(&mut v);
+                v.to_string().into_bytes()
+            } else {
+                bytes
+            };
+            files.push((name.to_string(), bytes));
+        }
+        if stdout {
+            files.push(("stdout".to_string(), run.stdout));
+        }
+        seen.push(files);
+    }
+    for (one, two) in seen[0].iter().zip(&seen[1]) {
+        assert!(
+            one.1 == two.1,
+            "{args:?}: {} differs between 1 and 2 threads",
+            one.0
+        );
+    }
+}
+
+/// Every command, on the logistic model (`hot-road`, the `road` scene) and on
+/// real air (`hot-road-kelvin`, the `looming` scene, the US 1976 atmosphere).
+#[test]
+fn every_command_is_identical_with_one_and_two_threads_for_both_kinds() {
+    for (problem, scene) in [
+        ("problems/hot-road.json", "problems/scenes/road.json"),
+        (
+            "problems/hot-road-kelvin.json",
+            "problems/scenes/looming.json",
+        ),
+    ] {
+        same_at_one_and_two_threads(
+            &["trace", problem, "-o", "{out}/t.json"],
+            &["t.json"],
+            false,
+        );
+        same_at_one_and_two_threads(
+            &["fit", "-q", problem, "-o", "{out}/f.json"],
+            &["f.json"],
+            false,
+        );
+        same_at_one_and_two_threads(
+            &[
+                "tradeoff",
+                "--no-fit",
+                problem,
+                "-o",
+                "{out}/d.json",
+                "--csv",
+                "{out}/d.csv",
+            ],
+            &["d.json"],
+            false,
+        );
+        same_at_one_and_two_threads(&["rays", problem, "-o", "{out}/r.svg"], &["r.svg"], false);
+        same_at_one_and_two_threads(
+            &["air", problem, "-o", "{out}/a.json", "--csv", "{out}/a.csv"],
+            &["a.json", "a.csv"],
+            false,
+        );
+        same_at_one_and_two_threads(
+            &[
+                "render",
+                "-q",
+                "--width",
+                "48",
+                "--height",
+                "27",
+                scene,
+                "-o",
+                "{out}/i.png",
+                "--exr",
+                "{out}/i.exr",
+            ],
+            &["i.png", "i.exr"],
+            false,
+        );
+        same_at_one_and_two_threads(
+            &[
+                "sky",
+                scene,
+                "-o",
+                "{out}/s.exr",
+                "--width",
+                "32",
+                "--height",
+                "17",
+            ],
+            &["s.exr"],
+            false,
+        );
+        same_at_one_and_two_threads(&["air", scene, "-o", "{out}/a.json"], &["a.json"], false);
+    }
+    same_at_one_and_two_threads(
+        &[
+            "refraction",
+            "problems/atmospheres/us1976.json",
+            "--height",
+            "2",
+            "-o",
+            "{out}/r.json",
+            "--csv",
+            "{out}/r.csv",
+        ],
+        &["r.json", "r.csv"],
+        false,
+    );
+    same_at_one_and_two_threads(
+        &["refractivity", "--temperature", "-40", "--humidity", "0.5"],
+        &[],
+        true,
+    );
 }
