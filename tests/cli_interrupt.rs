@@ -189,3 +189,46 @@ fn ctrl_c_stops_a_tradeoff_without_writing_its_tables() {
         .arg(d.join("t.png"));
     interrupted("tradeoff", cmd, d, &["slow.json"]);
 }
+
+/// Needs a GPU adapter (lavapipe serves): skipped loudly without one, unless
+/// `MIRAGE_REQUIRE_GPU=1`.
+#[cfg(feature = "preview")]
+#[test]
+fn ctrl_c_stops_a_headless_preview_without_writing_its_frame() {
+    if let Err(e) = mirage::preview::gpu::Gpu::new() {
+        if std::env::var("MIRAGE_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+            panic!("MIRAGE_REQUIRE_GPU=1 but {e}");
+        }
+        use std::io::Write as _;
+        let _ = writeln!(
+            std::io::stderr(),
+            "\n*** SKIPPED ctrl_c_stops_a_headless_preview_without_writing_its_frame: {e} ***\n"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Early, the driver may still be compiling the shader (seconds on
+    // lavapipe: the handler's forced exit); later, the frame's passes poll.
+    for after in [AT_WORK, Duration::from_secs(6)] {
+        let mut cmd = mirage();
+        // Many samples a pixel: a frame of many seconds on any adapter.
+        // Mesa warns on stderr without XDG_RUNTIME_DIR.
+        cmd.env(
+            "XDG_RUNTIME_DIR",
+            std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| d.display().to_string()),
+        );
+        cmd.args(["preview", "--headless", "--spp", "256"])
+            .args(["--width", "1280", "--height", "720"])
+            .arg(root().join("problems/scenes/road.json"))
+            .arg("-o")
+            .arg(d.join("frame.png"));
+        interrupted_after(
+            after,
+            &format!("preview --headless, signal after {after:?}"),
+            cmd,
+            d,
+            &[],
+        );
+    }
+}
