@@ -678,6 +678,9 @@ fn gpu_matches_cpu_over_the_round_earth() {
     );
 }
 
+/// A linear frame: RGB, row-major.
+type Frame = Vec<[f32; 3]>;
+
 /// The window's accumulation, driven as the window drives it: each still
 /// frame's samples from [`Accumulation`], set in the uniform block, traced
 /// onto the sums of the frames before, for each of `per_frame` in turn (one
@@ -690,7 +693,7 @@ fn accumulated_frames(
     view: &View,
     target: u32,
     per_frame: &[u32],
-) -> (Vec<(Vec<[f32; 3]>, u32)>, Vec<[f32; 3]>) {
+) -> (Vec<(Frame, u32)>, Frame) {
     use mirage::preview::accumulate::Accumulation;
     use mirage::preview::gpu::Tracer;
     let mut buffers = mirage::preview::pack::pack(scene, &scene.medium, view).unwrap();
