@@ -11,7 +11,8 @@
 //!   path and what is wrong, exit code 2. A check the user asked for that the
 //!   result misses ([`Error::LimitsMissed`]) is exit code 1; everything else
 //!   (files that cannot be read or written, images that cannot be encoded, the
-//!   GPU, the solver) has a typed variant and exit code 1 too.
+//!   GPU, the solver) has a typed variant and exit code 1 too. A run stopped
+//!   by Ctrl-C is [`Error::Interrupted`], exit code 130.
 
 use std::path::{Path, PathBuf};
 
@@ -181,6 +182,10 @@ pub enum Error {
         /// Each limit missed, in words.
         missed: Vec<String>,
     },
+    /// The run was interrupted (Ctrl-C) before it finished; nothing was
+    /// written (exit code 130, [`crate::interrupt`]).
+    #[error("interrupted (Ctrl-C): stopped before the end, no output written")]
+    Interrupted,
     /// The solver could not run (exit code 1).
     #[error("solver run `{run}`: {message}")]
     Solver {
@@ -230,10 +235,11 @@ impl Error {
     }
 
     /// The process exit code for this error: 2 for bad input (a file, a flag
-    /// or an output path), 1 for everything else.
+    /// or an output path), 130 for an interrupted run, 1 for everything else.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } | Error::Usage { .. } | Error::Output { .. } => 2,
+            Error::Interrupted => i32::from(crate::interrupt::EXIT_CODE),
             Error::Io { .. }
             | Error::Encode { .. }
             | Error::Gpu { .. }

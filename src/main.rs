@@ -11,6 +11,7 @@ fn main() -> ExitCode {
         Err(e) => return mirage::cli::report_parse_error(&e),
     };
     cli.set_threads();
+    cli.handle_interrupts();
     match cli.run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -15,9 +15,12 @@
 //! - Every input error the CLI reports with exit code 2 becomes `InputError`
 //!   (a `ValueError`) carrying `.file` and `.field`.
 //! - Long calls release the GIL and poll for signals every 50 ms, so Ctrl-C
-//!   raises `KeyboardInterrupt` at once. The library has no cancellation
-//!   points, so the abandoned computation runs to its end on its own thread and
-//!   its result is dropped; nothing it would have returned is written anywhere.
+//!   raises `KeyboardInterrupt` at once. The library's cancellation points
+//!   poll a process-wide flag ([`crate::interrupt`]) that only the command
+//!   line's handler sets (setting it here would stop every other call in the
+//!   process too), so the abandoned computation runs to its end on its own
+//!   thread and its result is dropped; nothing it would have returned is
+//!   written anywhere.
 
 use crate::error::Error;
 use crate::math::V3;

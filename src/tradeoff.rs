@@ -89,12 +89,16 @@ fn time_it(budget: Duration, mut f: impl FnMut()) -> f64 {
     let mut times = Vec::new();
     let start = Instant::now();
     while times.len() < 3 || (start.elapsed() < budget && times.len() < 1000) {
+        if crate::interrupt::requested() {
+            // The caller's next cancellation point reports it.
+            break;
+        }
         let t = Instant::now();
         f();
         times.push(t.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
+    times.get(times.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// Measures the trade on `problem`'s medium and pairs; with `fit`, also fits at
@@ -102,6 +106,7 @@ fn time_it(budget: Duration, mut f: impl FnMut()) -> f64 {
 /// calling thread, so times are per core.
 pub fn measure(problem: &Problem, fit: bool) -> Result<Tradeoff> {
     let reference = trace_pairs(&with_method(problem, REFERENCE), &problem.medium);
+    crate::interrupt::check()?;
     let ref_fit = if fit && !problem.free.is_empty() {
         let p = with_method(problem, REFERENCE);
         let t = Instant::now();
@@ -118,6 +123,7 @@ pub fn measure(problem: &Problem, fit: bool) -> Result<Tradeoff> {
     );
     let mut points = Vec::new();
     for method in methods {
+        crate::interrupt::check()?;
         let p = with_method(problem, method);
         let report = trace_pairs(&p, &problem.medium);
         let endpoint_error = report
@@ -142,6 +148,7 @@ pub fn measure(problem: &Problem, fit: bool) -> Result<Tradeoff> {
                 let t = Instant::now();
                 let r = crate::fit::fit(&p, None)?;
                 let time_s = t.elapsed().as_secs_f64();
+                crate::interrupt::check()?;
                 let at_ref = trace_pairs(&with_method(problem, REFERENCE), &r.medium);
                 let parameter_error = r
                     .parameters

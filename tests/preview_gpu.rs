@@ -677,3 +677,111 @@ fn gpu_matches_cpu_over_the_round_earth() {
         120,
     );
 }
+
+/// A linear frame: RGB, row-major.
+type Frame = Vec<[f32; 3]>;
+
+/// The window's accumulation, driven as the window drives it: each still
+/// frame's samples from [`Accumulation`], set in the uniform block, traced
+/// onto the sums of the frames before, for each of `per_frame` in turn (one
+/// tracer: a shader compiled once). Returns per `per_frame` the picture
+/// (with the scene's glare, as the window adds it once complete) and the
+/// frames it took, and the picture after the very first frame.
+fn accumulated_frames(
+    gpu: &Gpu,
+    scene: &Scene,
+    view: &View,
+    target: u32,
+    per_frame: &[u32],
+) -> (Vec<(Frame, u32)>, Frame) {
+    use mirage::preview::accumulate::Accumulation;
+    use mirage::preview::gpu::Tracer;
+    let mut buffers = mirage::preview::pack::pack(scene, &scene.medium, view).unwrap();
+    let mut tracer = Tracer::new(gpu, &buffers);
+    assert!(tracer.accumulates());
+    let mut first_frame = None;
+    let mut out = Vec::new();
+    for &per in per_frame {
+        let moving = View {
+            samples_per_pixel: per,
+            ..*view
+        };
+        let mut acc = Accumulation::new(target);
+        let mut frames = 0;
+        loop {
+            buffers.set_view(&moving);
+            let Some(samples) = acc.next(frames > 0, per) else {
+                break;
+            };
+            buffers.set_samples(samples, tracer.accumulates());
+            tracer.update(gpu, &buffers);
+            tracer.render(gpu);
+            frames += 1;
+            if first_frame.is_none() {
+                first_frame = Some(tracer.read_back(gpu).unwrap());
+            }
+        }
+        let mut pixels = tracer.read_back(gpu).unwrap();
+        mirage::preview::apply_glare(scene, view, &mut pixels);
+        out.push((pixels, frames));
+    }
+    (out, first_frame.unwrap())
+}
+
+/// Largest |a − b| / max(|a|, |b|, 1e-3) over pixels and channels, and the
+/// number of values that differ at all.
+fn relative_difference(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, usize) {
+    assert_eq!(a.len(), b.len());
+    let (mut worst, mut differ) = (0.0f64, 0usize);
+    for (p, q) in a.iter().zip(b) {
+        for k in 0..3 {
+            let (x, y) = (p[k] as f64, q[k] as f64);
+            if x != y {
+                differ += 1;
+            }
+            worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
+        }
+    }
+    (worst, differ)
+}
+
+#[test]
+fn the_accumulated_window_frame_is_the_headless_frame_at_as_many_samples() {
+    // A problem's view: the checkered ground that aliases at one sample. The
+    // headless frame at N samples per pixel sums each pixel's samples
+    // 0..N−1 in one frame; the window, its view still, adds them frame by
+    // frame in the accumulation buffer (one sample a frame, and three: the
+    // last frame takes the two left). Both do the same f32 additions in the
+    // same order, so they agree to rounding: the tolerance is 1e-6 relative
+    // (8 ulp of f32), for a driver that schedules the two dispatch shapes
+    // differently; a sample's worth of difference is ~1e-1, a display step
+    // 4e-3.
+    let test = "the_accumulated_window_frame_is_the_headless_frame_at_as_many_samples";
+    let Some(gpu) = gpu(test) else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = mirage::preview::load_input(&root.join("problems/hot-road.json"))
+        .unwrap()
+        .scene;
+    let n = 8;
+    let options = RenderOptions {
+        samples_per_pixel: Some(n),
+        ..RenderOptions::default()
+    };
+    let view = View::of_scene(&scene, &options, 120, 68);
+    let headless = render_frame(&gpu, &scene, &scene.medium, &view).unwrap();
+    let per_frame = [1, 3];
+    let (windows, one) = accumulated_frames(&gpu, &scene, &view, n, &per_frame);
+    for (&per, (window, frames)) in per_frame.iter().zip(&windows) {
+        assert_eq!(*frames, n.div_ceil(per));
+        let (worst, differ) = relative_difference(&headless, window);
+        eprintln!(
+            "{test}: {per} a frame, {frames} frames: {differ} values differ \
+             (largest {worst:.1e} relative) from the headless frame at {n} spp"
+        );
+        assert!(worst <= 1e-6, "{worst:e} ({differ} values differ)");
+    }
+    // Not a vacuous comparison: the samples change the picture.
+    let (_, from_one) = relative_difference(&headless, &one);
+    eprintln!("{test}: {from_one} values differ between 1 and {n} spp");
+    assert!(from_one > 100, "only {from_one} values differ at 1 spp");
+}

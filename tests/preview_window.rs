@@ -1,6 +1,6 @@
 //! The previewer's window under Xvfb: it opens, renders frames with its
 //! panels, saves a screenshot and exits cleanly; and once its view is still it
-//! shows the scene's veiling glare.
+//! accumulates samples, then shows the scene's veiling glare.
 //!
 //! Needs `xvfb-run` (Debian `xvfb xauth`) and a GPU adapter (lavapipe will
 //! do). Without them the test prints a loud SKIPPED line and passes, unless
@@ -110,13 +110,20 @@ fn the_window_shows_the_glare_once_the_view_is_still() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let size = ["--frames", "6", "--width", "480", "--height", "270"];
+    // Glare waits for the accumulation of a still view: two samples here.
+    let size = [
+        "--frames", "6", "--width", "480", "--height", "270", "--spp", "2",
+    ];
     let (with, without) = (dir.path().join("glare.png"), dir.path().join("none.png"));
     let scene = "problems/scenes/road-sunset.json";
     let stderr = run_window(dir.path(), scene, &size, &with);
     let sources = glare_sources(&stderr);
     eprintln!("glare sources in the window: {sources:?}");
     assert!(sources.is_some_and(|n| n > 0), "no glare: {stderr}");
+    assert!(
+        stderr.contains("accumulated: 2 samples per pixel"),
+        "no accumulation: {stderr}"
+    );
     let mut args = size.to_vec();
     args.push("--no-glare");
     let stderr = run_window(dir.path(), scene, &args, &without);

@@ -182,6 +182,8 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         bar.finish_and_clear();
     }
     let report = report?;
+    // The last cancellation point: once writing starts, it finishes.
+    crate::interrupt::check()?;
     if let Some(out) = &options.output {
         write_json(out, &report)?;
     }

@@ -12,7 +12,9 @@
 //! the problem or `--target-objective` sets one; the outputs are still
 //! written) or the work itself failed (a file could not be written, the GPU,
 //! the solver); 2 for bad input (a file, a flag, an output path), found before
-//! any work starts ([`crate::io::check_outputs`]).
+//! any work starts ([`crate::io::check_outputs`]); 130 when Ctrl-C stopped a
+//! long run (`fit`, `render`, `tradeoff`, `preview --headless`) before it
+//! wrote anything ([`crate::interrupt`]).
 
 pub mod air;
 pub mod compare;
@@ -41,7 +43,9 @@ Exit codes:
      work failed (writing a file, the GPU, the solver)
   2  bad input: a problem or scene file, a flag, or an output path (its folder
      missing, its extension wrong, an input's path), all checked before any
-     work starts";
+     work starts
+  130  interrupted (Ctrl-C) during fit, render, tradeoff or preview --headless:
+     stopped within a second, no output written";
 
 /// The exit codes of `mirage fit` (the end of `mirage fit --help`).
 pub const FIT_EXIT_CODES: &str = "\
@@ -53,7 +57,8 @@ Exit codes:
   1  F ended above the target objective so set (the outputs are written all
      the same; the result's solver.reached_target is false), or writing an
      output or the solver failed
-  2  bad input: the problem, a flag, or an output path (checked before the fit)";
+  2  bad input: the problem, a flag, or an output path (checked before the fit)
+  130  interrupted (Ctrl-C): stopped within a second, no output written";
 
 /// The whole command line.
 #[derive(Debug, clap::Parser)]
@@ -102,6 +107,20 @@ pub enum Command {
 }
 
 impl Command {
+    /// Whether the command polls [`crate::interrupt`]'s flag, so that Ctrl-C
+    /// should set it rather than end the process: `fit`, `render`,
+    /// `tradeoff` and `preview --headless`. The other commands are short, or
+    /// (the window) stop on their own; Ctrl-C ends them as it ends any
+    /// process, which their atomic writes make safe.
+    pub fn polls_interrupts(&self) -> bool {
+        match self {
+            Command::Fit(_) | Command::Render(_) | Command::Tradeoff(_) => true,
+            #[cfg(feature = "preview")]
+            Command::Preview(o) => o.headless,
+            _ => false,
+        }
+    }
+
     /// Whether the command may keep the main thread in a window's event loop.
     fn runs_a_window(&self) -> bool {
         #[cfg(feature = "preview")]
@@ -132,6 +151,17 @@ impl Cli {
             // Only fails if a pool already exists, which cannot happen before
             // the command runs.
             let _ = pool.build_global();
+        }
+    }
+
+    /// Installs the Ctrl-C handler ([`crate::interrupt::install_handler`])
+    /// when the command polls its flag ([`Command::polls_interrupts`]); if
+    /// none can be installed, says so and leaves Ctrl-C to end the process.
+    pub fn handle_interrupts(&self) {
+        if self.command.polls_interrupts()
+            && let Err(e) = crate::interrupt::install_handler()
+        {
+            eprintln!("warning: cannot catch Ctrl-C ({e}): it will end the run at once");
         }
     }
 

@@ -45,6 +45,8 @@ pub fn run(o: &TradeoffOptions) -> Result<Tradeoff> {
         crate::tradeoff::check_fit(&problem)?;
     }
     let t = crate::tradeoff::measure(&problem, fit)?;
+    // The last cancellation point: once writing starts, it finishes.
+    crate::interrupt::check()?;
     if let Some(out) = &o.output {
         write_json(out, &t)?;
     }

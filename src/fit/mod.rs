@@ -52,6 +52,7 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
         settings.target_objective,
         hook,
     )?;
+    crate::interrupt::check()?;
     let medium = objective.medium(&solution.x);
     let (_, jac) = objective.jacobian(&solution.x);
     let ident = identify::analyse(&jac, &solution.x, &problem.free, solution.objective);

@@ -155,7 +155,13 @@ impl Objective {
             // change who computes a chunk, not what it computes.
             jobs.par_chunks(LANE_CHUNK)
                 .zip(part.par_chunks_mut(LANE_CHUNK))
-                .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
+                .for_each(|(jobs, part)| {
+                    // Ctrl-C: the chunks left are skipped, and the solver's
+                    // next cancellation point discards these residuals.
+                    if !crate::interrupt::requested() {
+                        trace_batch_into(field, jobs, &batch, part)
+                    }
+                });
             for (i, t) in members.into_iter().zip(part) {
                 traces[i] = t;
             }
@@ -226,6 +232,10 @@ impl Objective {
             .par_iter()
             .enumerate()
             .map(|(i, pair)| {
+                if crate::interrupt::requested() {
+                    // Ctrl-C: as in `residuals`, a row to be discarded.
+                    return ([0.0; 3], [[0.0; N]; 3], 0);
+                }
                 let (t, res) = pair.evaluate::<D<N>, _>(fields.of(i), &self.options, None);
                 let comps = [res.x, res.y, res.z];
                 let mut d = [[0.0; N]; 3];

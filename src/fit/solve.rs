@@ -71,6 +71,7 @@ impl Operator for Residuals<'_> {
     type Param = DVector<f64>;
     type Output = DVector<f64>;
     fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        crate::interrupt::check()?;
         Ok(self.0.residuals(x.as_slice()).0)
     }
 }
@@ -79,6 +80,7 @@ impl Jacobian for Residuals<'_> {
     type Param = DVector<f64>;
     type Jacobian = DMatrix<f64>;
     fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        crate::interrupt::check()?;
         Ok(self.0.jacobian(x.as_slice()).1)
     }
 }
@@ -127,6 +129,7 @@ impl CostFunction for Cost<'_> {
     type Param = DVector<f64>;
     type Output = f64;
     fn cost(&self, z: &DVector<f64>) -> Result<f64, ArgminError> {
+        crate::interrupt::check()?;
         Ok(self.objective.cost(&self.map.to_box(z.as_slice())))
     }
 }
@@ -219,6 +222,9 @@ impl<J: 'static> Observe<IterState<DVector<f64>, (), J, (), (), f64>> for Record
             state.get_best_cost(),
             state.get_best_param(),
         );
+        // An error from an observer ends the run: a cancellation point per
+        // iterate, beside the one per evaluation.
+        crate::interrupt::check()?;
         Ok(())
     }
 }
@@ -236,7 +242,13 @@ fn describe(reason: Option<&TerminationReason>) -> (String, bool) {
 /// answer in 9 iterations and costs the other problems 2–5 iterations.
 const INITIAL_DAMPING: f64 = 0.1;
 
+/// A failed run as the error to report: [`Error::Interrupted`] when Ctrl-C
+/// stopped it (the cancellation points above fail the run), else the
+/// solver's message.
 fn solver_error(run: &str, e: impl std::fmt::Display) -> Error {
+    if crate::interrupt::requested() {
+        return Error::Interrupted;
+    }
     Error::Solver {
         run: run.to_string(),
         message: e.to_string(),

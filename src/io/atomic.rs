@@ -43,6 +43,8 @@ pub fn write_atomic_with(
             "the output path names no file",
         ))
     })?;
+    // Ctrl-C's forced exit waits for the write to end (crate::interrupt).
+    let _writing = crate::interrupt::Writing::start();
     let result = (|| {
         let mut w = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(&tmp)?);
         write(&mut w)?;

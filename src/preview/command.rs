@@ -32,6 +32,12 @@ pub struct PreviewOptions {
     /// Frame height in pixels.
     #[arg(long, value_parser = crate::render::image_side)]
     pub height: Option<u32>,
+    /// Samples per pixel: of the headless frame (default: the scene's), or
+    /// the most the window accumulates while the view is still (default
+    /// 16). The samples are the renderer's fixed sequence, so N accumulated
+    /// in the window make the headless frame at --spp N.
+    #[arg(long, value_parser = crate::render::samples_per_pixel)]
+    pub spp: Option<u32>,
     /// Show the albedo of what each ray hits.
     #[arg(long)]
     pub albedo: bool,
@@ -115,12 +121,15 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
         }
         return super::window::run(
             input,
-            width,
-            height,
-            o.albedo,
-            o.straight,
-            o.frames,
-            o.screenshot.clone(),
+            super::window::WindowSettings {
+                width,
+                height,
+                albedo: o.albedo,
+                straight: o.straight,
+                accumulate: o.spp.unwrap_or(super::accumulate::DEFAULT_TARGET),
+                frames: o.frames,
+                screenshot: o.screenshot.clone(),
+            },
         );
     }
     if o.output.is_none() && !o.bench {
@@ -136,6 +145,7 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
             Shading::Lit
         },
         straight: o.straight,
+        samples_per_pixel: o.spp,
         ..RenderOptions::default()
     };
     let gpu = open_gpu()?;
@@ -152,8 +162,12 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
         let frames = 3;
         let start = Instant::now();
         for _ in 0..frames {
+            // Whole frames, as the window traces them: a cancellation point
+            // between frames only.
+            crate::interrupt::check()?;
             tracer.render(&gpu);
         }
+        crate::interrupt::check()?;
         let ms = start.elapsed().as_secs_f64() * 1000.0 / frames as f64;
         println!(
             "{}: {w}×{h} px on {}: {ms:.1} ms/frame ({:.1} frames/s, mean of {frames})",
@@ -173,6 +187,8 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
             Shading::Albedo => ToneMap::Clamp,
         };
         let png = encode_png(w, h, &pixels, tone)?;
+        // The last cancellation point: once writing starts, it finishes.
+        crate::interrupt::check()?;
         write_atomic(out, &png)?;
     }
     Ok(())

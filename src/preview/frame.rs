@@ -22,7 +22,9 @@ pub fn open_gpu() -> Result<Gpu> {
 }
 
 /// Renders one frame of `scene` seen through `medium` on the GPU and reads it
-/// back: linear RGB, row-major, top row first.
+/// back: linear RGB, row-major, top row first. Ctrl-C stops it between two
+/// compute passes ([`Tracer::render_interruptible`]) as
+/// [`Error::Interrupted`].
 pub fn render_frame(
     gpu: &Gpu,
     scene: &Scene,
@@ -31,7 +33,9 @@ pub fn render_frame(
 ) -> Result<Vec<[f32; 3]>> {
     let buffers = pack(scene, medium, view).map_err(|e| e.in_file(&scene.source))?;
     let tracer = Tracer::new(gpu, &buffers);
-    let mut pixels = tracer.render_to_cpu(gpu)?;
+    tracer.render_interruptible(gpu)?;
+    let mut pixels = tracer.read_back(gpu)?;
+    crate::interrupt::check()?;
     apply_glare(scene, view, &mut pixels);
     Ok(pixels)
 }

@@ -88,6 +88,10 @@ pub struct Tracer {
     band_bytes: u64,
     sky: wgpu::Texture,
     output: wgpu::Texture,
+    /// Per pixel, the sum of its samples while the window accumulates
+    /// ([`super::accumulate`]); 16 bytes when the image's would not fit in
+    /// one storage binding ([`Tracer::accumulates`]).
+    accum: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     width: u32,
     height: u32,
@@ -199,6 +203,24 @@ fn band_buffers(
     (rows, count, rays, bands, stride)
 }
 
+/// The accumulation buffer of an image `width × height`: an RGBA f32 sum per
+/// pixel, or 16 bytes (nothing accumulates) when that is more than one
+/// storage binding may hold.
+fn accum_buffer(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Buffer {
+    let limits = device.limits();
+    let bytes = 16 * width as u64 * height as u64;
+    let fits = bytes
+        <= limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("accumulated samples"),
+        size: if fits { bytes } else { 16 },
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
 fn output_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some("linear image"),
@@ -246,6 +268,16 @@ impl Tracer {
         entries.extend((1..=4).chain(7..=10).map(storage_entry));
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 11,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 13,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only: false },
@@ -322,6 +354,7 @@ impl Tracer {
         });
         let (width, height) = (scene.params.size[0].max(1), scene.params.size[1].max(1));
         let output = output_texture(device, width, height);
+        let accum = accum_buffer(device, width, height);
         let (band_rows, band_count, rays, bands, band_stride) =
             band_buffers(device, width, height, band_bytes);
         let hotspots = storage_buffer(device, "hot spots", bytemuck::cast_slice(&scene.hotspots));
@@ -340,6 +373,7 @@ impl Tracer {
                 &rays,
             ],
             &bands,
+            &accum,
             &sky,
             &output,
         );
@@ -363,6 +397,7 @@ impl Tracer {
             band_bytes,
             sky,
             output,
+            accum,
             bind_group,
             width,
             height,
@@ -373,12 +408,14 @@ impl Tracer {
     }
 
     /// The bind group: `buffers` are the uniform block, then the storage
-    /// buffers at bindings 1–4 and 7–11; `bands` one band's row at binding 12.
+    /// buffers at bindings 1–4 and 7–11; `bands` one band's row at binding
+    /// 12; `accum` the accumulation buffer at 13.
     fn bind(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
         buffers: [&wgpu::Buffer; 10],
         bands: &wgpu::Buffer,
+        accum: &wgpu::Buffer,
         sky: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> wgpu::BindGroup {
@@ -399,6 +436,10 @@ impl Tracer {
                 offset: 0,
                 size: wgpu::BufferSize::new(16),
             }),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 13,
+            resource: accum.as_entire_binding(),
         });
         entries.push(wgpu::BindGroupEntry {
             binding: 5,
@@ -477,6 +518,7 @@ impl Tracer {
         self.passes = passes(&scene.params);
         if (w, h) != (self.width, self.height) {
             self.output = output_texture(device, w, h);
+            self.accum = accum_buffer(device, w, h);
             (
                 self.band_rows,
                 self.band_count,
@@ -505,6 +547,7 @@ impl Tracer {
                     &self.rays,
                 ],
                 &self.bands,
+                &self.accum,
                 &self.sky,
                 &self.output,
             );
@@ -542,6 +585,12 @@ impl Tracer {
         }
     }
 
+    /// Whether the accumulation buffer holds the image (else frames cannot
+    /// add to the samples of the frames before: [`super::accumulate`]).
+    pub fn accumulates(&self) -> bool {
+        self.accum.size() >= 16 * self.width as u64 * self.height as u64
+    }
+
     /// Passes a band of a frame takes.
     pub fn passes(&self) -> u32 {
         self.passes
@@ -565,6 +614,45 @@ impl Tracer {
         self.dispatch(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// Traces one frame as [`Tracer::render`] does, but one submission per
+    /// compute pass, waiting for each: a cancellation point
+    /// ([`crate::interrupt`]) between passes, so that Ctrl-C stops a
+    /// headless frame within a pass (one pass marches every pixel's ray on by
+    /// a bounded number of iterations) rather than at the end of the frame.
+    /// The passes are those of [`Tracer::dispatch`], in the same order on the
+    /// same buffers: the frame is the same.
+    pub fn render_interruptible(&self, gpu: &Gpu) -> Result<()> {
+        for b in 0..self.band_count {
+            for k in 0..self.passes {
+                crate::interrupt::check()?;
+                let mut encoder = gpu
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+                if k == 0 {
+                    encoder.clear_buffer(&self.rays, 0, None);
+                }
+                {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("trace"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_pipeline(&self.pipeline);
+                    pass.set_bind_group(0, &self.bind_group, &[b * self.band_stride]);
+                    pass.dispatch_workgroups(
+                        self.width.div_ceil(WORKGROUP),
+                        self.band_rows.div_ceil(WORKGROUP),
+                        1,
+                    );
+                }
+                gpu.queue.submit([encoder.finish()]);
+                gpu.device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| Error::gpu("waiting for a pass", e))?;
+            }
+        }
+        crate::interrupt::check()
     }
 
     /// Traces one frame and reads it back: linear RGB, row-major, top row first.

@@ -150,6 +150,10 @@ pub struct Params {
     /// `[march iterations of one sample at most, iterations per pass, 0, 0]`
     /// (see [`super::pack`](mod@super::pack)).
     pub march: [u32; 4],
+    /// Accumulation ([`super::accumulate`]): `[samples already summed in the
+    /// accumulation buffer (the first sample this frame traces), keep the
+    /// sums there (1) or not (0), 0, 0]`; all 0 for a frame of its own.
+    pub accumulate: [u32; 4],
 }
 
 /// A pixel's ray between the passes of a frame (`Ray` in the shader; the

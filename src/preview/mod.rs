@@ -16,6 +16,7 @@
 //! distance grid (the GPU evaluates every object whose bounding sphere is
 //! nearer than the best distance so far).
 
+pub mod accumulate;
 pub mod camera;
 mod command;
 pub mod display;

@@ -28,6 +28,7 @@
 //! [`march_iterations`] of them, and a frame at most [`passes`] passes; the
 //! later ones find most pixels done and return at once.
 
+use super::accumulate::Samples;
 use super::layout::{
     BIG, GROUND_CHECKER, GROUND_NONE, GROUND_UNIFORM, GpuCell, GpuHotSpot, GpuObject,
     MEDIUM_LOGISTIC, Node, Params, SHADING_ALBEDO, SHADING_LIT, rgb4, v4,
@@ -343,7 +344,18 @@ impl SceneBuffers {
         };
         p.tolerance = [1e-4, (view.hit_fraction * c.pixel_angle()) as f32, 0.0, 0.0];
         p.counts[2] = view.samples_per_pixel.max(1);
+        p.accumulate = [0; 4];
         p.stars[0] = star_radius(c.pixel_angle()) as f32;
+    }
+
+    /// Sets the samples the next frame traces, for the window's accumulation
+    /// ([`super::accumulate`]): `samples.first` onwards, added to the sums
+    /// of the frames before when `first > 0`; with `keep`, the sums are kept
+    /// for the next frame to add to.
+    pub fn set_samples(&mut self, samples: Samples, keep: bool) {
+        let p = &mut self.params;
+        p.counts[2] = samples.count.max(1);
+        p.accumulate = [samples.first, u32::from(keep), 0, 0];
     }
 
     /// Sets the medium and what follows from it (the air's analysis, the

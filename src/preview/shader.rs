@@ -220,6 +220,7 @@ mod tests {
                 air_range,
                 air_grid,
                 march,
+                accumulate,
             }),
         );
         check_struct(
@@ -274,7 +275,8 @@ mod tests {
     fn the_bindings_hold_the_rust_elements() {
         let module = validate("trace shader", &trace_shader());
         // Binding → the size of one element of what SceneBuffers uploads
-        // there (11: the tracer's own ray states).
+        // there (11: the tracer's own ray states; 13: its per-pixel sums
+        // of samples, RGBA f32).
         let storage = [
             (1, size_of::<GpuHotSpot>()),
             (2, size_of::<GpuObject>()),
@@ -285,6 +287,7 @@ mod tests {
             (9, size_of::<[f32; 4]>()),
             (10, size_of::<[f32; 4]>()),
             (11, size_of::<GpuRay>()),
+            (13, size_of::<[f32; 4]>()),
         ];
         let mut seen = 0;
         for (_, var) in module.global_variables.iter() {

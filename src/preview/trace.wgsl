@@ -56,6 +56,7 @@ struct Params {
     air_range: vec4<f32>,
     air_grid: vec4<f32>,
     march: vec4<u32>,
+    accumulate: vec4<u32>,
 }
 struct Cell { empty: f32, far: f32, start: u32, len: u32 }
 
@@ -78,6 +79,9 @@ struct Node { kind: vec4<u32>, row0: vec4<f32>, row1: vec4<f32>, row2: vec4<f32>
 // The band of rows a dispatch traces: [first row, rows, 0, 0] (a frame too
 // large for one buffer of rays is traced band by band).
 @group(0) @binding(12) var<uniform> band: vec4<u32>;
+// Per pixel of the whole image, the sum of its samples so far while the
+// window accumulates a still view (P.accumulate; src/preview/accumulate.rs).
+@group(0) @binding(13) var<storage, read_write> accum: array<vec4<f32>>;
 
 const PI: f32 = 3.14159265358979;
 
@@ -1090,7 +1094,8 @@ fn camera_ray(id: vec2<u32>, sample: u32) -> Ray {
 // One pass over a band of the image: each pixel's ray marches on from where
 // the last pass left it (the host clears `rays` to PHASE_START before a
 // band's first pass); a sample that ends is shaded, and the pixel's last one
-// writes its colour. At most one sample ends in a pass, so that a pass shades
+// writes its colour (the mean of this frame's samples and, when accumulating,
+// of the P.accumulate.x samples before them). At most one sample ends in a pass, so that a pass shades
 // at most once.
 @compute @workgroup_size(WORKGROUP, WORKGROUP)
 fn main(@builtin(global_invocation_id) local: vec3<u32>) {
@@ -1101,10 +1106,15 @@ fn main(@builtin(global_invocation_id) local: vec3<u32>) {
     let phase = rays[i].count.x;
     if (phase == PHASE_DONE) { return; }
     var ray = rays[i];
+    let pixel = id.x + w * id.y;
     if (phase == PHASE_START) {
-        let sum = ray.sum;
+        var sum = ray.sum;
         let sample = ray.count.y;
-        ray = camera_ray(id.xy, sample);
+        // A frame that adds to the samples of the frames before starts from
+        // their sum: the same f32 additions, in the same order, as one frame
+        // that traces them all.
+        if (sample == 0u && P.accumulate.x > 0u) { sum = accum[pixel]; }
+        ray = camera_ray(id.xy, P.accumulate.x + sample);
         ray.sum = sum;
         ray.count.y = sample;
     }
@@ -1122,6 +1132,7 @@ fn main(@builtin(global_invocation_id) local: vec3<u32>) {
         rays[i].count = vec4<u32>(PHASE_START, sample, 0u, 0u);
         return;
     }
-    textureStore(out_image, vec2<i32>(i32(id.x), i32(id.y)), vec4<f32>(sum / f32(spp), 1.0));
+    if (P.accumulate.y != 0u) { accum[pixel] = vec4<f32>(sum, 0.0); }
+    textureStore(out_image, vec2<i32>(i32(id.x), i32(id.y)), vec4<f32>(sum / f32(P.accumulate.x + spp), 1.0));
     rays[i].count.x = PHASE_DONE;
 }

@@ -16,13 +16,21 @@
 //!   editable (the editor edits logistic parameters): its panel says so, and
 //!   its sliders, hot-spot drags, fit and save are off.
 //!
-//! - **Glare**: once the view has been still for a frame, the scene's veiling
+//! - **Accumulation** ([`super::accumulate`]): while anything changes each
+//!   frame traces "samples per frame" afresh; once the view is still, each
+//!   frame adds the next samples of the renderer's sequence to the picture,
+//!   up to "accumulate up to" (`--spp`, default 16), and then no frame is
+//!   traced until something changes. The panel says how many samples the
+//!   picture holds. N accumulated samples make the headless frame at
+//!   `--spp N`.
+//! - **Glare**: once the still view holds all its samples, the scene's veiling
 //!   glare is added on the CPU to the frame traced last, as on headless frames;
 //!   moving, editing or unticking "glare" traces afresh.
 //!
 //! Overlays (hot-spot rims, pair markers) are placed with straight rays: they
 //! mark where things are, the traced image shows where they appear.
 
+use super::accumulate::Accumulation;
 use super::camera::{CameraState, MAX_FOV, MIN_FOV};
 use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
@@ -45,17 +53,38 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
 
-/// Opens the previewer window on `input`; closes after `frames` frames if
-/// given, saving the last one (picture and panels) to `screenshot`.
-pub fn run(
-    input: Input,
-    width: Option<u32>,
-    height: Option<u32>,
-    albedo: bool,
-    straight: bool,
-    frames: Option<u64>,
-    screenshot: Option<PathBuf>,
-) -> Result<()> {
+/// How the window starts: `mirage preview`'s flags, checked.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WindowSettings {
+    /// Window width in pixels (default 1600).
+    pub width: Option<u32>,
+    /// Window height in pixels (default 900).
+    pub height: Option<u32>,
+    /// Show the albedo of what each ray hits.
+    pub albedo: bool,
+    /// Straight rays.
+    pub straight: bool,
+    /// The most samples per pixel accumulated while the view is still (≥ 1).
+    pub accumulate: u32,
+    /// Close after this many frames.
+    pub frames: Option<u64>,
+    /// Save the last frame (picture and panels) here.
+    pub screenshot: Option<PathBuf>,
+}
+
+/// Opens the previewer window on `input`; closes after `settings.frames`
+/// frames if given, saving the last one (picture and panels) to
+/// `settings.screenshot`.
+pub fn run(input: Input, settings: WindowSettings) -> Result<()> {
+    let WindowSettings {
+        width,
+        height,
+        albedo,
+        straight,
+        accumulate,
+        frames,
+        screenshot,
+    } = settings;
     let event_loop = EventLoop::new().map_err(|e| {
         Error::gpu(
             "opening a window (is DISPLAY set? mirage preview --headless renders without one)",
@@ -64,6 +93,7 @@ pub fn run(
     })?;
     let size = (width.unwrap_or(1600), height.unwrap_or(900));
     let mut app = App::new(input, size, albedo, straight, frames, screenshot);
+    app.accumulation = Accumulation::new(accumulate);
     event_loop
         .run_app(&mut app)
         .map_err(|e| Error::gpu("running the window's event loop", e))?;
@@ -109,7 +139,10 @@ struct App {
     camera: CameraState,
     shading: Shading,
     straight: bool,
+    /// Samples a frame traces.
     spp: u32,
+    /// The samples in the picture, and the most it accumulates.
+    accumulation: Accumulation,
     render_scale: u32,
     exposure: f32,
     glare: bool,
@@ -193,6 +226,7 @@ impl App {
             },
             straight,
             spp: 1,
+            accumulation: Accumulation::new(super::accumulate::DEFAULT_TARGET),
             render_scale: 1,
             exposure,
             glare: true,
@@ -356,7 +390,28 @@ impl App {
                 ui.label(&self.glare_message);
             }
         }
-        ui.add(egui::Slider::new(&mut self.spp, 1..=16).text("samples per pixel"));
+        ui.add(egui::Slider::new(&mut self.spp, 1..=16).text("samples per frame"));
+        let mut target = self.accumulation.target();
+        if ui
+            .add(
+                egui::Slider::new(&mut target, 1..=1024)
+                    .logarithmic(true)
+                    .text("accumulate up to"),
+            )
+            .changed()
+        {
+            self.accumulation.set_target(target);
+        }
+        ui.label(format!(
+            "{} of {} samples per pixel in the picture{}",
+            self.accumulation.samples(),
+            self.accumulation.target(),
+            if self.accumulation.complete() {
+                ""
+            } else {
+                " (adding while the view is still)"
+            }
+        ));
         ui.horizontal(|ui| {
             ui.label("resolution");
             for s in [1, 2, 4] {
@@ -650,21 +705,46 @@ impl App {
         }
     }
 
-    /// Whether this frame traces the view: yes while anything changes, or
-    /// when the scene has no glare to show. Once the view has been still for
-    /// a frame, the image traced last is read back, given the scene's glare
-    /// on the CPU ([`super::frame::apply_glare`], as headless frames get it) and
-    /// uploaded in its place, and no frame is traced until something changes.
-    fn glare_or_trace(&mut self, g: &Graphics, view: &View, medium_changed: bool) -> Result<bool> {
+    /// Whether this frame traces the view, and which samples: while
+    /// anything changes, `spp` samples afresh; once the view is the one
+    /// traced last, the next samples added to the picture's
+    /// ([`super::accumulate`]) until it holds its target; then nothing is
+    /// traced until something changes, and (once) the image traced last is
+    /// read back, given the scene's glare on the CPU
+    /// ([`super::frame::apply_glare`], as headless frames get it) and
+    /// uploaded in its place. Sets the samples in `g.buffers`' uniform block.
+    fn glare_or_trace(
+        &mut self,
+        g: &mut Graphics,
+        view: &View,
+        medium_changed: bool,
+    ) -> Result<bool> {
+        // The view as `set_view` left it (no accumulation fields set): what
+        // "still" compares.
         let params = bytemuck::bytes_of(&g.buffers.params);
         let still = !medium_changed && self.traced == params;
         self.traced = params.to_vec();
-        let want = self.glare && self.shading == Shading::Lit && self.input.scene.glare.is_some();
-        if !(still && want) {
+        if !g.tracer.accumulates() {
+            // An image too large for the accumulation buffer: a frame holds
+            // what it traces.
+            self.accumulation.set_target(self.spp);
+        }
+        if let Some(samples) = self.accumulation.next(still, self.spp) {
+            g.buffers.set_samples(samples, g.tracer.accumulates());
             self.glared = false;
+            if samples.first > 0 && self.accumulation.complete() {
+                // For the window test and the curious: accumulation ran.
+                eprintln!(
+                    "accumulated: {} samples per pixel in a {}×{} frame",
+                    samples.total(),
+                    view.camera.width,
+                    view.camera.height
+                );
+            }
             return Ok(true);
         }
-        if !self.glared {
+        let want = self.glare && self.shading == Shading::Lit && self.input.scene.glare.is_some();
+        if want && !self.glared {
             let mut pixels = g.tracer.read_back(&g.gpu)?;
             if let Some(stats) = super::frame::apply_glare(&self.input.scene, view, &mut pixels) {
                 g.tracer.upload(&g.gpu, &pixels);
@@ -680,6 +760,11 @@ impl App {
                 );
             }
             self.glared = true;
+        }
+        if !want && self.glared {
+            // Glare unticked on a still view: the picture without it again.
+            self.accumulation = Accumulation::new(self.accumulation.target());
+            return self.glare_or_trace(g, view, true);
         }
         Ok(false)
     }
@@ -764,8 +849,9 @@ impl App {
     /// this frame traces ([`Self::glare_or_trace`]).
     fn upload_view(&mut self, g: &mut Graphics, view: &View, medium_changed: bool) -> Result<bool> {
         g.buffers.set_view(view);
+        let trace = self.glare_or_trace(g, view, medium_changed)?;
         g.tracer.update(&g.gpu, &g.buffers);
-        self.glare_or_trace(g, view, medium_changed)
+        Ok(trace)
     }
 
     /// The surface's next texture; `None` when it is lost or outdated: the

@@ -18,7 +18,8 @@
 //!   of what a ray hits (the sky's radiance for a miss), for validation.
 //! - **Speed**: rayon over 16 × 16 tiles with an indicatif progress bar; each
 //!   pixel depends on nothing but its own samples, so the image is bitwise the
-//!   same for any number of threads.
+//!   same for any number of threads. Each tile is a cancellation point
+//!   ([`crate::interrupt`]).
 
 pub mod accel;
 pub mod air;
@@ -454,7 +455,9 @@ impl Renderer {
         true
     }
 
-    /// Renders the image.
+    /// Renders the image. Once [`crate::interrupt::requested`], the tiles
+    /// not yet started are left black: a caller that polls the flag checks
+    /// it after this returns ([`render_command`] does).
     pub fn render(&self) -> Rendered {
         if let Some(channels) = &self.channels {
             let mut image = Renderer::render_channels(channels);
@@ -493,6 +496,12 @@ impl Renderer {
                 let tiles: Vec<(Vec<[f32; 3]>, RenderStats)> = (0..tiles_x)
                     .into_par_iter()
                     .map(|tx| {
+                        // A cancellation point per tile: once Ctrl-C is pressed
+                        // the workers skip the tiles left (an empty tile stays
+                        // black), and the caller reports the interruption.
+                        if crate::interrupt::requested() {
+                            return (Vec::new(), RenderStats::default());
+                        }
                         let out = self.render_tile(tx, ty as u32);
                         bar.inc(1);
                         out
@@ -527,9 +536,11 @@ impl Renderer {
         image
     }
 
-    /// Adds the scene's veiling glare, if it has one and the options want it.
+    /// Adds the scene's veiling glare, if it has one and the options want it
+    /// (not to a render Ctrl-C cut short: it is not kept).
     fn apply_glare(&self, image: &mut Rendered) {
         if let Some(g) = &self.scene.glare
+            && !crate::interrupt::requested()
             && self.options.glare
             && self.options.shading == Shading::Lit
         {
@@ -655,8 +666,9 @@ pub(crate) fn image_side(s: &str) -> std::result::Result<u32, crate::error::Valu
     }
 }
 
-/// `--spp`: 1 to [`MAX_SAMPLES_PER_PIXEL`](crate::scene::description::MAX_SAMPLES_PER_PIXEL).
-fn samples_per_pixel(s: &str) -> std::result::Result<u32, crate::error::ValueError> {
+/// `--spp` of a render or preview: 1 to
+/// [`MAX_SAMPLES_PER_PIXEL`](crate::scene::description::MAX_SAMPLES_PER_PIXEL).
+pub(crate) fn samples_per_pixel(s: &str) -> std::result::Result<u32, crate::error::ValueError> {
     let max = crate::scene::description::MAX_SAMPLES_PER_PIXEL;
     match s
         .parse::<u32>()
@@ -719,7 +731,10 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
         options.hit_fraction = f;
     }
     let renderer = Renderer::new(&scene, &options);
+    crate::interrupt::check()?;
     let image = renderer.render();
+    // The last cancellation point: once writing starts, it finishes.
+    crate::interrupt::check()?;
     let tone = match options.shading {
         Shading::Lit => output::ToneMap::Filmic {
             exposure: scene.exposure,

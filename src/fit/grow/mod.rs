@@ -159,6 +159,8 @@ fn fit_model(
         // is a seed that did not fit: F = ∞, and the other seeds decide.
         match run_lm(&objective, settings, &model.bounds, &x0, "grow", None) {
             Ok(run) => (run.end, run.objective),
+            // Ctrl-C is no failed seed: it stops the growth.
+            Err(Error::Interrupted) => return Err(Error::Interrupted),
             Err(_) => (x0, f64::INFINITY),
         }
     };
