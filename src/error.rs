@@ -196,6 +196,9 @@ pub enum Error {
     },
 }
 
+/// The exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+pub const INTERRUPTED_EXIT_CODE: u8 = 130;
+
 impl Error {
     /// An input error in `file` at `field`.
     pub fn input(file: &Path, field: impl Into<String>, message: impl Into<String>) -> Self {
@@ -239,7 +242,7 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } | Error::Usage { .. } | Error::Output { .. } => 2,
-            Error::Interrupted => i32::from(crate::interrupt::EXIT_CODE),
+            Error::Interrupted => i32::from(INTERRUPTED_EXIT_CODE),
             Error::Io { .. }
             | Error::Encode { .. }
             | Error::Gpu { .. }

@@ -39,7 +39,7 @@ static REQUESTED: AtomicBool = AtomicBool::new(false);
 
 /// The exit code of an interrupted run: 128 + SIGINT (2), as shells report a
 /// process that SIGINT ended.
-pub const EXIT_CODE: u8 = 130;
+pub const EXIT_CODE: u8 = crate::error::INTERRUPTED_EXIT_CODE;
 
 /// Outputs being written now ([`Writing`]).
 static WRITING: AtomicUsize = AtomicUsize::new(0);
@@ -102,7 +102,7 @@ pub fn check() -> Result<()> {
 /// only (a library must leave the process's signals to its host). `Err` with the reason when
 /// no handler can be installed; Ctrl-C then ends the process as it would
 /// without one.
-pub fn install_handler() -> std::result::Result<(), String> {
+pub fn install_handler() -> std::result::Result<(), ctrlc::Error> {
     ctrlc::set_handler(|| {
         request();
         std::thread::sleep(GRACE);
@@ -112,5 +112,4 @@ pub fn install_handler() -> std::result::Result<(), String> {
         eprintln!("error: {}", Error::Interrupted);
         std::process::exit(i32::from(EXIT_CODE));
     })
-    .map_err(|e| e.to_string())
 }
