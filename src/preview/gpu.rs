@@ -142,11 +142,20 @@ pub fn copy_to_buffer(
 }
 
 fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    storage_entry_with(binding, true)
+}
+
+/// A compute shader's storage buffer the shader writes (the image, the sums).
+fn writable_storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    storage_entry_with(binding, false)
+}
+
+fn storage_entry_with(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            ty: wgpu::BufferBindingType::Storage { read_only },
             has_dynamic_offset: false,
             min_binding_size: None,
         },
@@ -266,26 +275,7 @@ impl Tracer {
             count: None,
         }];
         entries.extend((1..=4).chain(7..=10).map(storage_entry));
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: 11,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: 13,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        });
+        entries.extend([11, 13].map(writable_storage_entry));
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 12,
             visibility: wgpu::ShaderStages::COMPUTE,
