@@ -90,8 +90,7 @@ impl HotSpotGrid {
     /// half the hot spots on average.
     pub fn new(spots: &[Reach]) -> Option<Self> {
         let n = spots.len();
-        if n < 2
-            || n > MAX_ENTRIES
+        if !(2..=MAX_ENTRIES).contains(&n)
             || spots
                 .iter()
                 .any(|s| !(s.x.is_finite() && s.z.is_finite() && s.radius.is_finite()))
