@@ -1,7 +1,12 @@
 //! Ray-tracing throughput on one core: the scalar generic tracer, the 3-D
 //! lanes kernel and the stratified 2-D kernel (for every instruction set this
-//! CPU runs), through four media: background only, background + inversion,
-//! and the full medium with one and with eight hot spots. Criterion's
+//! CPU runs), through six media: background only, background + inversion,
+//! and the full medium with one and with eight hot spots (large, soft rims
+//! that all cover the rays: nothing to cull), and with 64 and 1,024 small hot
+//! spots scattered over 20 km² (rays crossing a few: culled, see
+//! `src/medium/cull.rs`). Where a medium is culled, the scalar tracer and the
+//! widest lanes build also run unculled (every hot spot at every step, the
+//! code before culling) on the first 16 rays. Criterion's
 //! throughput is RK4 steps per second (`Throughput::Elements(steps)`); a table
 //! of rays/s and steps/s per path follows at the end. Then Dormand–Prince
 //! (adaptive steps, each lane its own) through the logistic model and real
@@ -15,7 +20,7 @@
 //! `cargo bench --bench trace -- "hot spot/"` runs a subset (the table is
 //! printed unless `MIRAGE_BENCH_NO_TABLE` is set).
 
-use criterion::{BenchmarkId, Criterion, Throughput};
+use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput};
 use mirage::fit::objective::Objective;
 use mirage::math::V3;
 use mirage::medium::{
@@ -67,11 +72,43 @@ fn media() -> Vec<(&'static str, LogisticMedium)> {
     };
     vec![
         ("background", base),
-        ("inversion", inv),
+        ("inversion", inv.clone()),
         ("hot spot", hot1),
         ("8 hot spots", hot8),
+        ("64 hot spots", scattered(&inv, 64)),
+        ("1024 hot spots", scattered(&inv, 1024)),
     ]
 }
+
+/// `count` hot spots scattered uniformly over 20 km² (x in ±2 km, z from −1 to
+/// 4 km) around the rays of [`jobs`], radius 10–40 m, rims of 1/m (their
+/// reach, R + 40 m, is what culling keeps), on `layers`: a desert of
+/// patches. A ray of 1–1.5 km crosses a few of the 1,024.
+fn scattered(layers: &LogisticMedium, count: usize) -> LogisticMedium {
+    let mut seed = 0x5eed_u64;
+    let mut uniform = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    LogisticMedium {
+        hotspots: (0..count)
+            .map(|_| HotSpot {
+                x: -2000.0 + 4000.0 * uniform(),
+                z: -1000.0 + 5000.0 * uniform(),
+                radius: 10.0 + 30.0 * uniform(),
+                n: -2.0,
+                a: -0.8,
+                edge: 1.0,
+            })
+            .collect(),
+        ..layers.clone()
+    }
+}
+
+/// Rays the unculled paths trace (every hot spot at every step is slow).
+const UNCULLED_RAYS: usize = 16;
 
 /// 64 mirage-like rays: an observer 2.5 m up looking 1–1.5 km ahead, within a
 /// few tenths of a degree of the horizon (as in desert-lake).
@@ -142,6 +179,30 @@ fn paths(field: &LogisticField) -> Vec<Path_> {
     out
 }
 
+/// The scalar tracer and the widest lanes build without culling, for a field
+/// that culls (none otherwise).
+fn unculled_paths(field: &LogisticField) -> Vec<Path_> {
+    if field.grid().is_none() {
+        return Vec::new();
+    }
+    let batch = BatchOptions::from_trace_options(&options());
+    let isa = Isa::detect();
+    vec![
+        (
+            "scalar unculled".to_string(),
+            Box::new(|f: &LogisticField, j: &[RayJob], o: &mut [Trace]| {
+                scalar(&f.clone().unculled(), j, o)
+            }),
+        ),
+        (
+            format!("lanes-{} unculled", isa.name()),
+            Box::new(move |f: &LogisticField, j: &[RayJob], o: &mut [Trace]| {
+                trace_batch_3d(isa, &f.clone().unculled(), j, &batch, o)
+            }),
+        ),
+    ]
+}
+
 fn placeholder() -> Trace {
     Trace {
         endpoint: V3::ZERO,
@@ -176,6 +237,24 @@ fn bench_trace(c: &mut Criterion) {
         for (path, run) in paths(&field) {
             group.bench_function(BenchmarkId::from_parameter(&path), |b| {
                 b.iter(|| run(black_box(&field), black_box(&jobs), &mut out))
+            });
+        }
+        group.finish();
+        let unculled = unculled_paths(&field);
+        if unculled.is_empty() {
+            continue;
+        }
+        let few = &jobs[..UNCULLED_RAYS];
+        let mut group = c.benchmark_group(format!("{name}, {UNCULLED_RAYS} rays"));
+        group
+            .throughput(Throughput::Elements(total_steps(&field, few)))
+            .sampling_mode(SamplingMode::Flat)
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(100))
+            .measurement_time(Duration::from_secs(3));
+        for (path, run) in paths(&field).into_iter().take(1).chain(unculled) {
+            group.bench_function(BenchmarkId::from_parameter(&path), |b| {
+                b.iter(|| run(black_box(&field), black_box(few), &mut out[..UNCULLED_RAYS]))
             });
         }
         group.finish();
@@ -389,17 +468,23 @@ fn table() {
         cpu_features()
     );
     println!(
-        "{:<12} {:<20} {:>12} {:>14}",
-        "medium", "path", "rays/s", "M steps/s"
+        "{:<15} {:<24} {:>5} {:>12} {:>14}",
+        "medium", "path", "rays", "rays/s", "M steps/s"
     );
     for (name, medium) in media() {
         let field = medium.field();
-        let steps = total_steps(&field, &jobs) as f64;
         let mut out = vec![placeholder(); jobs.len()];
-        for (path, run) in paths(&field) {
-            let t = best_time(|| run(&field, &jobs, &mut out));
+        let all = paths(&field).into_iter().map(|p| (p, &jobs[..]));
+        let few = unculled_paths(&field)
+            .into_iter()
+            .map(|p| (p, &jobs[..UNCULLED_RAYS]));
+        for ((path, run), jobs) in all.chain(few) {
+            let steps = total_steps(&field, jobs) as f64;
+            let out = &mut out[..jobs.len()];
+            let t = best_time(|| run(&field, jobs, out));
             println!(
-                "{name:<12} {path:<20} {:>12.0} {:>14.2}",
+                "{name:<15} {path:<24} {:>5} {:>12.0} {:>14.2}",
+                jobs.len(),
                 jobs.len() as f64 / t,
                 steps / t / 1e6
             );

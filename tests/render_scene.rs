@@ -489,3 +489,49 @@ fn path_reuse_agrees_with_integration() {
     assert!(differ * 200 < a.pixels.len(), "{differ}");
     let _ = MarchStats::default();
 }
+
+/// The desert of patches: hundreds of hot spots, culled (each step pays
+/// for the patches within reach), and it renders: finite pixels, and the
+/// patches' ponds change what straight rays would show.
+#[test]
+fn the_desert_of_patches_culls_and_renders() {
+    let s = scene("desert-patches");
+    let mirage::medium::Medium::Logistic(m) = &s.medium else {
+        panic!("a logistic medium");
+    };
+    assert!(m.hotspots.len() >= 300, "{} hot spots", m.hotspots.len());
+    let field = m.field();
+    let grid = field.grid().expect("hundreds of small patches are culled");
+    assert!(grid.longest() < m.hotspots.len() / 10, "{}", grid.longest());
+    assert!(!s.objects.is_empty() && s.ground.is_some());
+    let opts = RenderOptions {
+        width: Some(96),
+        ..RenderOptions::default()
+    };
+    let curved = render(&s, &opts);
+    let straight = render(
+        &s,
+        &RenderOptions {
+            straight: true,
+            ..opts
+        },
+    );
+    assert!(
+        curved
+            .pixels
+            .iter()
+            .flatten()
+            .all(|c| c.is_finite() && *c >= 0.0)
+    );
+    let changed = curved
+        .pixels
+        .iter()
+        .zip(&straight.pixels)
+        .filter(|(a, b)| (0..3).any(|c| (a[c] - b[c]).abs() > 0.02))
+        .count();
+    assert!(
+        changed * 100 >= curved.pixels.len(),
+        "only {changed} of {} pixels differ from straight rays",
+        curved.pixels.len()
+    );
+}

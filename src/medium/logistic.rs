@@ -28,6 +28,7 @@
 //!   "hotspots": [ { "x": 0, "z": 600, "radius": 120, "n": -2, "a": -0.4 } ] }
 //! ```
 
+use super::cull::{HotSpotGrid, Reach};
 use super::envelope::{Envelope, Patch, VerticalFeature};
 use super::rim::rim_weight;
 use super::{HotField, IndexField, Param};
@@ -411,11 +412,17 @@ impl LogisticMedium<f64> {
 /// The logistic model compiled for evaluation: amplitudes pre-divided by S and
 /// multiplied by C·|k_s|, reciprocal rates, all in the scalar type `T` so that
 /// the same code yields exact parameter derivatives.
+///
+/// With many hot spots, a point pays only for those within reach: a
+/// [`HotSpotGrid`] built from the parameters' real parts lists them, and the
+/// terms left out are below the threshold of `docs/model.md` ("Culling").
+/// [`LogisticField::unculled`] evaluates every term.
 #[derive(Clone, Debug)]
 pub struct LogisticField<T = f64> {
     background: Option<Layer<T>>,
     inversion: Option<(Layer<T>, T)>,
     hotspots: Vec<CompiledHotSpot<T>>,
+    grid: Option<HotSpotGrid>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -460,7 +467,13 @@ impl<T: Real> LogisticField<T> {
             amp: coef(n),
             inv_rate: a.recip(),
         };
+        let reaches: Vec<Reach> = m
+            .hotspots
+            .iter()
+            .map(|h| Reach::of(h.x.val(), h.z.val(), h.radius.val(), h.edge.val()))
+            .collect();
         LogisticField {
+            grid: HotSpotGrid::new(&reaches),
             background: m.background.map(|b| layer(b.n, b.a)),
             inversion: m.inversion.map(|i| (layer(i.n, i.a), i.height)),
             hotspots: m
@@ -478,6 +491,21 @@ impl<T: Real> LogisticField<T> {
     }
 }
 
+impl<T> LogisticField<T> {
+    /// The same field evaluating every hot spot everywhere (no culling): the
+    /// reference that culled results are checked against.
+    pub fn unculled(mut self) -> Self {
+        self.grid = None;
+        self
+    }
+
+    /// The grid that culls the hot spots, if this field has one (see
+    /// [`HotSpotGrid::new`] for when it does).
+    pub fn grid(&self) -> Option<&HotSpotGrid> {
+        self.grid.as_ref()
+    }
+}
+
 /// [`LogisticField<f64>`]'s compiled coefficients as plain numbers, for the
 /// SIMD tracer (`trace::batch`), which evaluates the same formula lane-wise.
 #[derive(Clone, Debug)]
@@ -488,6 +516,8 @@ pub(crate) struct RawCoefficients {
     pub inversion: Option<[f64; 3]>,
     /// Per hot spot `[amp, 1/a, x, z, radius, edge]`.
     pub hotspots: Vec<[f64; 6]>,
+    /// The grid that culls them, if any.
+    pub grid: Option<HotSpotGrid>,
 }
 
 impl LogisticField<f64> {
@@ -501,6 +531,7 @@ impl LogisticField<f64> {
                 .iter()
                 .map(|h| [h.layer.amp, h.layer.inv_rate, h.x, h.z, h.radius, h.edge])
                 .collect(),
+            grid: self.grid.clone(),
         }
     }
 }
@@ -521,7 +552,7 @@ impl<T: Real> IndexField<T> for LogisticField<T> {
             delta += l.amp * s;
             grad.y -= l.amp * ds * l.inv_rate;
         }
-        for hs in &self.hotspots {
+        let mut add = |hs: &CompiledHotSpot<T>| {
             let (w, dw_drho, ux, uz) = rim_weight(p.x - hs.x, p.z - hs.z, hs.radius, hs.edge);
             let (s, ds) = sigmoid(p.y * hs.layer.inv_rate);
             let amp_s = hs.layer.amp * s;
@@ -529,6 +560,17 @@ impl<T: Real> IndexField<T> for LogisticField<T> {
             grad.y += hs.layer.amp * w * ds * hs.layer.inv_rate;
             grad.x += amp_s * dw_drho * ux;
             grad.z += amp_s * dw_drho * uz;
+        };
+        match &self.grid {
+            // The hot spots within reach, in the medium's order (the decision
+            // on the real parts: the set is constant around the point, so
+            // dual parts are those of the terms kept).
+            Some(grid) => {
+                for &j in grid.candidates(p.x.val(), p.z.val()) {
+                    add(&self.hotspots[j as usize]);
+                }
+            }
+            None => self.hotspots.iter().for_each(add),
         }
         (delta, grad)
     }

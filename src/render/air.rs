@@ -42,6 +42,7 @@
 
 use super::accel::Aabb;
 use crate::math::V3;
+use crate::medium::cull::{HotSpotGrid, Reach};
 use crate::medium::{Field, IndexField, LogisticMedium, Medium, VerticalFeature};
 use crate::trace::{Earth, OnEarth};
 use glam::{DVec2, DVec3};
@@ -160,6 +161,10 @@ pub struct Air {
     step_inside: f64,
     step_outside: f64,
     zones: Vec<Zone>,
+    /// The zones near a point, for many hot spots: each zone's disc grown by
+    /// the longest step (a zone farther away than that cannot shorten a step
+    /// nor contain the point), so a step pays for the zones nearby only.
+    near_zones: Option<HotSpotGrid>,
     profile: Profile,
     ground: bool,
     objects: Option<Aabb>,
@@ -290,8 +295,19 @@ impl Air {
                 radius,
             ),
         };
+        let near_zones = HotSpotGrid::new(
+            &zones
+                .iter()
+                .map(|z| Reach {
+                    x: z.x,
+                    z: z.z,
+                    radius: z.radius + step_outside,
+                })
+                .collect::<Vec<_>>(),
+        );
         Air {
             field,
+            near_zones,
             straight,
             stratified: envelope.patches.is_empty(),
             n_max,
@@ -438,7 +454,18 @@ impl Air {
     /// Whether `p` lies in a hot-spot zone (where the air is not stratified).
     pub fn in_zone(&self, p: DVec3) -> bool {
         let p = self.local(p);
-        self.zones.iter().any(|z| z.contains(p))
+        self.zones_near(p).any(|z| z.contains(p))
+    }
+
+    /// The zones that can contain the point `p` (local coordinates) or lie
+    /// within the longest step of it: all of them where there is no grid.
+    #[inline]
+    fn zones_near(&self, p: DVec3) -> impl Iterator<Item = &Zone> {
+        let (listed, all) = match &self.near_zones {
+            Some(grid) => (grid.candidates(p.x, p.z), &[][..]),
+            None => (&[][..], &self.zones[..]),
+        };
+        listed.iter().map(|&j| &self.zones[j as usize]).chain(all)
     }
 
     /// The RK4 step (arc length, metres) to take from `p`: in a zone, the
@@ -453,7 +480,9 @@ impl Air {
         let p = self.local(p);
         let mut inside = f64::INFINITY;
         let mut approach = f64::INFINITY;
-        for z in &self.zones {
+        // A zone farther than `step_outside` gives max(grown, d) above it,
+        // which cannot lower the result: the nearby zones decide.
+        for z in self.zones_near(p) {
             let grown = self.step_inside * z.step_growth(p.y);
             let d = z.distance(p);
             if d == 0.0 {
@@ -587,8 +616,7 @@ impl Air {
         if h.is_nan()
             || h < 0.0
             || self
-                .zones
-                .iter()
+                .zones_near(DVec3::new(p.x, h, p.z))
                 .any(|z| z.contains(DVec3::new(p.x, h, p.z)))
         {
             return None;

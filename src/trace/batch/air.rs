@@ -184,6 +184,9 @@ impl IndexField<f64> for AirLanes<'_> {
 }
 
 impl LaneField for AirLanes<'_> {
+    type Cache<const N: usize> = ();
+
+    fn cache<const N: usize>(&self) -> Self::Cache<N> {}
     #[inline(always)]
     fn layers<const N: usize, const FMA: bool>(
         &self,
@@ -200,6 +203,7 @@ impl LaneField for AirLanes<'_> {
     #[inline(always)]
     fn full<const N: usize, const FMA: bool>(
         &self,
+        _cache: &mut (),
         [x, y, z]: [&[f64; N]; 3],
         d: &mut [f64; N],
         [gx, gy, gz]: [&mut [f64; N]; 3],

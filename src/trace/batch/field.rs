@@ -12,7 +12,7 @@
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
-use super::terms::Coefficients;
+use super::terms::{Coefficients, HotCache};
 use crate::math::V3;
 use crate::medium::{IndexField, LogisticField};
 use crate::trace::OnEarth;
@@ -31,9 +31,17 @@ pub(crate) trait LaneField: IndexField<f64> {
         gy: &mut [f64; N],
     );
 
+    /// What [`LaneField::full`] keeps from one call to the next for `N`
+    /// lanes (each lane's culled hot spots); `()` where nothing.
+    type Cache<const N: usize>;
+
+    /// A fresh cache for `N` lanes.
+    fn cache<const N: usize>(&self) -> Self::Cache<N>;
+
     /// δ and ∇δ at positions `p`.
     fn full<const N: usize, const FMA: bool>(
         &self,
+        cache: &mut Self::Cache<N>,
         p: [&[f64; N]; 3],
         d: &mut [f64; N],
         g: [&mut [f64; N]; 3],
@@ -113,6 +121,12 @@ impl<F: LaneField> IndexField<f64> for EarthLanes<'_, F> {
 }
 
 impl<F: LaneField> LaneField for EarthLanes<'_, F> {
+    type Cache<const N: usize> = F::Cache<N>;
+
+    fn cache<const N: usize>(&self) -> Self::Cache<N> {
+        self.inner.cache()
+    }
+
     /// Never called: a field over the sphere is not stratified in a
     /// vertical plane, so the 2-D kernels decline it.
     fn layers<const N: usize, const FMA: bool>(
@@ -127,13 +141,14 @@ impl<F: LaneField> LaneField for EarthLanes<'_, F> {
     #[inline(always)]
     fn full<const N: usize, const FMA: bool>(
         &self,
+        cache: &mut Self::Cache<N>,
         p: [&[f64; N]; 3],
         d: &mut [f64; N],
         [gx, gy, gz]: [&mut [f64; N]; 3],
     ) {
         let (h, up) = self.heights(p);
         self.inner
-            .full::<N, FMA>([p[0], &h, p[2]], d, [&mut *gx, &mut *gy, &mut *gz]);
+            .full::<N, FMA>(cache, [p[0], &h, p[2]], d, [&mut *gx, &mut *gy, &mut *gz]);
         for i in 0..N {
             let g = gy[i];
             gx[i] += g * up[0][i];
@@ -186,6 +201,12 @@ impl IndexField<f64> for LogisticLanes<'_> {
 }
 
 impl LaneField for LogisticLanes<'_> {
+    type Cache<const N: usize> = HotCache<N>;
+
+    fn cache<const N: usize>(&self) -> Self::Cache<N> {
+        HotCache::new(self.c.grid.as_ref())
+    }
+
     #[inline(always)]
     fn layers<const N: usize, const FMA: bool>(
         &self,
@@ -202,6 +223,7 @@ impl LaneField for LogisticLanes<'_> {
     #[inline(always)]
     fn full<const N: usize, const FMA: bool>(
         &self,
+        cache: &mut Self::Cache<N>,
         p: [&[f64; N]; 3],
         d: &mut [f64; N],
         [gx, gy, gz]: [&mut [f64; N]; 3],
@@ -210,6 +232,6 @@ impl LaneField for LogisticLanes<'_> {
         *gx = [0.0; N];
         *gy = [0.0; N];
         *gz = [0.0; N];
-        self.c.delta_gradient::<N, FMA>(p, d, [gx, gy, gz]);
+        self.c.delta_gradient::<N, FMA>(cache, p, d, [gx, gy, gz]);
     }
 }

@@ -147,8 +147,9 @@ impl<const N: usize> Buf3<N> {
     /// Sets the rate from the field at the buffer's positions (n = 1 + δ,
     /// a = ∇δ·n, as `state::rate`), computing δ and ∇δ in place.
     #[inline(always)]
-    fn set_rate<F: LaneField, const FMA: bool>(&mut self, c: &F) {
+    fn set_rate<F: LaneField, const FMA: bool>(&mut self, c: &F, cache: &mut F::Cache<N>) {
         c.full::<N, FMA>(
+            cache,
             [&self.x, &self.y, &self.z],
             &mut self.n,
             [&mut self.ax, &mut self.ay, &mut self.az],
@@ -218,8 +219,10 @@ impl<const N: usize> LaneBuf<N, 7> for Buf3<N> {
 
 /// The 3-D lane kernel: the full field, hot spots included; the nearest
 /// point keeps (x, y, z, v_x, v_y, v_z, s).
-struct Lanes3<'a, F, const N: usize> {
+struct Lanes3<'a, F: LaneField, const N: usize> {
     field: &'a F,
+    /// What the field keeps between evaluations (its culled hot spots).
+    cache: F::Cache<N>,
     set: LaneSet<Buf3<N>, N, 7>,
 }
 
@@ -227,6 +230,7 @@ impl<'a, F: LaneField, const N: usize> Lanes3<'a, F, N> {
     fn new(field: &'a F, options: &BatchOptions) -> Self {
         Lanes3 {
             field,
+            cache: field.cache(),
             set: LaneSet::new(Buf3::ZERO, options.method, field.ceiling(), options.earth),
         }
     }
@@ -265,10 +269,13 @@ impl<F: LaneField, const N: usize> Kernel<N> for Lanes3<'_, F, N> {
         let attempts = match method {
             Method::Rk4 { .. } => {
                 let [k2, k3, k4, _, _] = stages;
-                rk4_3d::<F, N, FMA>(self.field, &control.h, y0, [k2, k3, k4], y1);
+                let c = (self.field, &mut self.cache);
+                rk4_3d::<F, N, FMA>(c, &control.h, y0, [k2, k3, k4], y1);
                 Attempts::all::<N>()
             }
-            Method::Dopri5 { .. } => dopri5_3d::<F, N, FMA>(self.field, control, y0, stages, y1),
+            Method::Dopri5 { .. } => {
+                dopri5_3d::<F, N, FMA>((self.field, &mut self.cache), control, y0, stages, y1)
+            }
         };
         self.set.flip();
         attempts
@@ -301,7 +308,7 @@ impl<F: LaneField, const N: usize> Kernel<N> for Lanes3<'_, F, N> {
 /// [`LaneSet::step_parts`]).
 #[inline(always)]
 fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
-    c: &F,
+    (c, cache): (&F, &mut F::Cache<N>),
     h: &[f64; N],
     y0: &Buf3<N>,
     [k2, k3, k4]: [&mut Buf3<N>; 3],
@@ -318,7 +325,7 @@ fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
         k2.vy[i] = fmadd::<FMA>(y0.ay[i], f, y0.vy[i]);
         k2.vz[i] = fmadd::<FMA>(y0.az[i], f, y0.vz[i]);
     }
-    k2.set_rate::<F, FMA>(c);
+    k2.set_rate::<F, FMA>(c, cache);
     // k3 at y + h/2·k2.
     for i in 0..N {
         let f = 0.5 * h[i];
@@ -329,7 +336,7 @@ fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
         k3.vy[i] = fmadd::<FMA>(k2.ay[i], f, y0.vy[i]);
         k3.vz[i] = fmadd::<FMA>(k2.az[i], f, y0.vz[i]);
     }
-    k3.set_rate::<F, FMA>(c);
+    k3.set_rate::<F, FMA>(c, cache);
     // k4 at y + h·k3.
     for i in 0..N {
         let f = h[i];
@@ -340,7 +347,7 @@ fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
         k4.vy[i] = fmadd::<FMA>(k3.ay[i], f, y0.vy[i]);
         k4.vz[i] = fmadd::<FMA>(k3.az[i], f, y0.vz[i]);
     }
-    k4.set_rate::<F, FMA>(c);
+    k4.set_rate::<F, FMA>(c, cache);
     for i in 0..N {
         let h6 = (1.0 / 6.0) * h[i];
         let h3 = (1.0 / 3.0) * h[i];
@@ -353,7 +360,7 @@ fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
         y1.vz[i] = combine::<FMA>(y0.vz[i], [y0.az[i], k2.az[i], k3.az[i], k4.az[i]], b);
         y1.s[i] = combine::<FMA>(y0.s[i], [y0.n[i], k2.n[i], k3.n[i], k4.n[i]], b);
     }
-    y1.set_rate::<F, FMA>(c);
+    y1.set_rate::<F, FMA>(c, cache);
 }
 
 /// One Dormand–Prince attempt of every lane from `y0` into `y1`: the scalar
@@ -361,7 +368,7 @@ fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
 /// `adaptive`). Rejected and underflowed lanes end where they started.
 #[inline(always)]
 fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
-    f: &F,
+    (f, cache): (&F, &mut F::Cache<N>),
     control: &mut Control<N>,
     y0: &Buf3<N>,
     [k2, k3, k4, k5, k6]: &mut [Buf3<N>; 5],
@@ -383,15 +390,15 @@ fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
         }};
     }
     stage!(k2, 1, [A21], [y0]);
-    k2.set_rate::<F, FMA>(f);
+    k2.set_rate::<F, FMA>(f, cache);
     stage!(k3, 2, [A31, A32], [y0, k2]);
-    k3.set_rate::<F, FMA>(f);
+    k3.set_rate::<F, FMA>(f, cache);
     stage!(k4, 3, [A41, A42, A43], [y0, k2, k3]);
-    k4.set_rate::<F, FMA>(f);
+    k4.set_rate::<F, FMA>(f, cache);
     stage!(k5, 4, [A51, A52, A53, A54], [y0, k2, k3, k4]);
-    k5.set_rate::<F, FMA>(f);
+    k5.set_rate::<F, FMA>(f, cache);
     stage!(k6, 5, [A61, A62, A63, A64, A65], [y0, k2, k3, k4, k5]);
-    k6.set_rate::<F, FMA>(f);
+    k6.set_rate::<F, FMA>(f, cache);
     stage!(y1, 5, [B1, B3, B4, B5, B6], [y0, k3, k4, k5, k6]);
     advance::<N, 5, FMA>(
         &y0.s,
@@ -400,7 +407,7 @@ fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
         [&y0.n, &k3.n, &k4.n, &k5.n, &k6.n],
         &mut y1.s,
     );
-    y1.set_rate::<F, FMA>(f);
+    y1.set_rate::<F, FMA>(f, cache);
     // The error estimate: position from the stages' v, v from their a.
     let mut e = [[0.0; N]; 6];
     let [ex, ey, ez, evx, evy, evz] = &mut e;

@@ -35,6 +35,9 @@
 //! was written on (AMD EPYC with AVX-512) that is about 50 M RK4 steps per
 //! second per core through the full medium with one hot spot, ten times the
 //! scalar tracer (`cargo bench --bench trace`).
+//! With many hot spots, each lane evaluates only those listed in its cell of
+//! the field's culling grid (`terms`, `docs/model.md` "Culling"), so a step
+//! costs the longest list among the lanes rather than every hot spot.
 //! Events (plane, ground, maximum length) are screened for all lanes with a
 //! cheap vector test after each step and resolved per lane by the scalar code
 //! of the tracer; a lane whose ray is done takes the next job, and when none is

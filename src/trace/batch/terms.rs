@@ -2,12 +2,25 @@
 //! [`LogisticField`] at every lane's position, with the operations of
 //! `LogisticField::delta_gradient` in its order and the polynomial
 //! exponential inlined, so that each term loop compiles to SIMD code.
+//!
+//! # Culling
+//!
+//! Where the field has a [`HotSpotGrid`], each lane pays only for the hot
+//! spots listed in its own cell, the list the scalar field takes at the same
+//! point, in the same order ([`HotCache`]): the lanes then agree with the
+//! scalar code as they do without culling. Each lane's list is copied into
+//! lane-major slots when the lane enters another cell, and the k-th slots
+//! of all lanes are evaluated together in one SIMD loop (the coefficients
+//! loaded per lane instead of broadcast); a lane with a shorter list is
+//! padded with a hot spot of zero amplitude, which adds exactly 0. A step
+//! thus costs the longest list among the lanes, not the number of hot spots.
 
 // Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
 use crate::medium::LogisticField;
+use crate::medium::cull::HotSpotGrid;
 use crate::trace::fastexp::{fmadd, sigmoid};
 
 /// The compiled field as plain numbers (see `LogisticField::coefficients`).
@@ -19,6 +32,74 @@ pub(crate) struct Coefficients {
     pub inversion: Option<[f64; 3]>,
     /// Hot spots `[amp, 1/a, x, z, radius, edge]`.
     pub hotspots: Vec<[f64; 6]>,
+    /// The grid that culls them, if any.
+    pub grid: Option<HotSpotGrid>,
+}
+
+/// A hot spot that adds exactly 0 at every finite point (zero amplitude,
+/// finite everything else): the padding of a short list.
+const NULL_SPOT: [f64; 6] = [0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+
+/// Each lane's culled hot spots (see the module documentation): the cell it
+/// was last evaluated in and that cell's hot spots, lane-major.
+pub(crate) struct HotCache<const N: usize> {
+    /// Each lane's cell (`usize::MAX`: none yet).
+    cell: [usize; N],
+    /// Each lane's number of listed hot spots.
+    count: [usize; N],
+    /// The largest count.
+    longest: usize,
+    /// `slots[k][f][i]`: coefficient f of lane i's k-th hot spot.
+    slots: Vec<[[f64; N]; 6]>,
+}
+
+impl<const N: usize> HotCache<N> {
+    /// A cache for the lists of `grid` (none: an empty cache, never read).
+    pub(crate) fn new(grid: Option<&HotSpotGrid>) -> Self {
+        let lane_major = std::array::from_fn(|f| [NULL_SPOT[f]; N]);
+        HotCache {
+            cell: [usize::MAX; N],
+            count: [0; N],
+            longest: 0,
+            slots: vec![lane_major; grid.map_or(0, HotSpotGrid::longest)],
+        }
+    }
+
+    /// Brings every lane's list to the cell of its position (x, z).
+    #[inline(always)]
+    fn update(&mut self, grid: &HotSpotGrid, spots: &[[f64; 6]], x: &[f64; N], z: &[f64; N]) {
+        let mut changed = false;
+        for i in 0..N {
+            let cell = grid.cell_of(x[i], z[i]);
+            if cell != self.cell[i] {
+                self.refill(i, cell, grid, spots);
+                changed = true;
+            }
+        }
+        if changed {
+            self.longest = self.count.iter().copied().max().unwrap_or(0);
+        }
+    }
+
+    /// Copies the list of `cell` into lane `i`'s slots (rare: on entering a
+    /// cell, so not inlined into the lane loops).
+    #[inline(never)]
+    fn refill(&mut self, i: usize, cell: usize, grid: &HotSpotGrid, spots: &[[f64; 6]]) {
+        let list = grid.list(cell);
+        for (slot, &j) in self.slots.iter_mut().zip(list) {
+            let h = spots[j as usize];
+            for f in 0..6 {
+                slot[f][i] = h[f];
+            }
+        }
+        for slot in &mut self.slots[list.len()..self.count[i].max(list.len())] {
+            for f in 0..6 {
+                slot[f][i] = NULL_SPOT[f];
+            }
+        }
+        self.cell[i] = cell;
+        self.count[i] = list.len();
+    }
 }
 
 impl Coefficients {
@@ -28,6 +109,7 @@ impl Coefficients {
             background: raw.background,
             inversion: raw.inversion,
             hotspots: raw.hotspots,
+            grid: raw.grid,
         }
     }
 
@@ -51,14 +133,26 @@ impl Coefficients {
     }
 
     /// δ and ∇δ at the lanes' positions, the whole field with hot spots,
-    /// accumulated into `d` and `g` (which the caller zeroes).
+    /// accumulated into `d` and `g` (which the caller zeroes); `cache` holds
+    /// each lane's culled hot spots where the field has a grid.
     #[inline(always)]
     pub(crate) fn delta_gradient<const N: usize, const FMA: bool>(
         &self,
+        cache: &mut HotCache<N>,
         p: [&[f64; N]; 3],
         d: &mut [f64; N],
         g: [&mut [f64; N]; 3],
     ) {
+        if let Some(grid) = &self.grid {
+            cache.update(grid, &self.hotspots, p[0], p[2]);
+            let (bg, inv) = (self.background, self.inversion);
+            return match (bg, inv) {
+                (Some(bg), Some(inv)) => culled::<N, FMA, true, true>(bg, inv, cache, p, d, g),
+                (Some(bg), None) => culled::<N, FMA, true, false>(bg, [0.0; 3], cache, p, d, g),
+                (None, Some(inv)) => culled::<N, FMA, false, true>([0.0; 2], inv, cache, p, d, g),
+                (None, None) => culled::<N, FMA, false, false>([0.0; 2], [0.0; 3], cache, p, d, g),
+            };
+        }
         match (self.background, self.inversion) {
             (Some(bg), Some(inv)) => self.full::<N, FMA, true, true>(bg, inv, p, d, g),
             (Some(bg), None) => self.full::<N, FMA, true, false>(bg, [0.0; 3], p, d, g),
@@ -110,6 +204,44 @@ impl Coefficients {
                 }
                 _ => unreachable!("chunks of at most two"),
             }
+        }
+    }
+}
+
+/// The culled field for one combination of layers: the layers, then each
+/// lane's listed hot spots (see the module documentation), two slots to a
+/// loop as in the unculled code, in the scalar code's order.
+#[inline(always)]
+fn culled<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
+    bg: [f64; 2],
+    inv: [f64; 3],
+    cache: &HotCache<N>,
+    [x, y, z]: [&[f64; N]; 3],
+    d: &mut [f64; N],
+    [gx, gy, gz]: [&mut [f64; N]; 3],
+) {
+    if BG || INV {
+        layer_loop::<N, FMA, BG, INV>(bg, inv, y, d, gy);
+    }
+    let lane = |slot: &[[f64; N]; 6], i: usize| std::array::from_fn(|f| slot[f][i]);
+    for pair in cache.slots[..cache.longest].chunks(2) {
+        match pair {
+            [s0, s1] => {
+                for i in 0..N {
+                    let acc = [d[i], gx[i], gy[i], gz[i]];
+                    let acc = hot_point::<FMA>(lane(s0, i), x[i], y[i], z[i], acc);
+                    let acc = hot_point::<FMA>(lane(s1, i), x[i], y[i], z[i], acc);
+                    [d[i], gx[i], gy[i], gz[i]] = acc;
+                }
+            }
+            [s0] => {
+                for i in 0..N {
+                    let acc = [d[i], gx[i], gy[i], gz[i]];
+                    [d[i], gx[i], gy[i], gz[i]] =
+                        hot_point::<FMA>(lane(s0, i), x[i], y[i], z[i], acc);
+                }
+            }
+            _ => unreachable!("chunks of at most two"),
         }
     }
 }
