@@ -19,9 +19,11 @@ use std::path::{Path, PathBuf};
 /// The path of the whole document (or of no particular field), in messages.
 pub const WHOLE_DOCUMENT: &str = "-";
 
-/// A problem with one field of an input document.
+/// A problem with one field of an input document. Shown as `path: message`,
+/// or as the message alone when it is about the whole document
+/// ([`WHOLE_DOCUMENT`]), so that no `-:` stands where a field name goes.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{path}: {message}")]
+#[error("{}{message}", if path == WHOLE_DOCUMENT { String::new() } else { format!("{path}: ") })]
 pub struct FieldError {
     /// Path of the field (`medium.hotspots[0].a`, `objects[2].radius`), relative
     /// to whatever the validator was given; [`WHOLE_DOCUMENT`] for none.

@@ -81,12 +81,15 @@ pub fn check_medium(m: &Medium) {
                 earth,
                 300.0,
                 Method::Rk4 { step: 5.0 },
+                m,
             );
         }
     }
 }
 
 /// One ray, capped; its endpoint, direction and length must be finite.
+/// `medium` is shown when it fails, so that a crash report says which air.
+#[allow(clippy::too_many_arguments)]
 pub fn check_ray(
     field: &mirage::medium::Field,
     origin: V3,
@@ -94,6 +97,7 @@ pub fn check_ray(
     earth: Earth,
     distance: f64,
     method: Method,
+    medium: &Medium,
 ) {
     let mut o = TraceOptions::new(method);
     o.max_steps = MAX_STEPS;
@@ -106,6 +110,6 @@ pub fn check_ray(
     let t = trace::<f64, _>(field, origin, direction, Some(&plane), &o, None);
     assert!(
         t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
-        "ray from {origin:?} along {direction:?} over {earth:?}: {t:?}"
+        "ray from {origin:?} along {direction:?} over {earth:?} by {method:?} through {medium:?}: {t:?}"
     );
 }

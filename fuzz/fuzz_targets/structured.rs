@@ -218,6 +218,6 @@ fuzz_target!(|case: Case| {
         if !distance.is_finite() {
             continue;
         }
-        common::check_ray(&field, origin, d, earth, distance, method);
+        common::check_ray(&field, origin, d, earth, distance, method, &m);
     }
 });

@@ -2,7 +2,7 @@
 //! failure (unreadable file, empty file, not an object, a type error deep inside,
 //! trailing text), so that no caller writes its own.
 
-use crate::error::{Error, FieldError, Result, join_path, split_nested};
+use crate::error::{Error, FieldError, Result, WHOLE_DOCUMENT, join_path, split_nested};
 use std::path::Path;
 
 /// Reads an input file; failure is an input error naming the file (exit 2).
@@ -39,7 +39,14 @@ pub fn parse_json<T: serde::de::DeserializeOwned>(
     let mut de = serde_json::Deserializer::from_str(text);
     let value: T = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let field = e.path().to_string();
-        let field = if field == "." { "-".to_string() } else { field };
+        // The top level is ".", and a syntax error inside a key that was never
+        // finished (fuzzing found `{"": {"a", ...`) has an empty path: both
+        // are the whole document; the message gives the line and column.
+        let field = if field == "." || field.is_empty() {
+            WHOLE_DOCUMENT.to_string()
+        } else {
+            field
+        };
         let inner = e.into_inner();
         let message = if inner.is_eof() {
             format!("the JSON ends too early (truncated file?): {inner}")
@@ -48,7 +55,7 @@ pub fn parse_json<T: serde::de::DeserializeOwned>(
         };
         match split_nested(&message) {
             Some((below, rest)) => {
-                let field = if field == "-" {
+                let field = if field == WHOLE_DOCUMENT {
                     below.to_string()
                 } else {
                     join_path(&field, below)

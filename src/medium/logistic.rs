@@ -452,17 +452,24 @@ impl<T: Real> LogisticField<T> {
             .filter(|(p, _)| p.is_amplitude())
             .map(|(_, v)| v)
             .collect();
+        // A subnormal largest amplitude (below 2.2e-308) has no finite 1/big:
+        // lift every amplitude by 2^600 first (exact), then divide (fuzzing
+        // found δ = NaN from 1/big = ∞).
         let big = amps.iter().map(|a| a.val().abs()).fold(0.0, f64::max);
-        let norm = if big > 0.0 && big.is_finite() {
-            1.0 / big
+        let pre = if big < f64::MIN_POSITIVE {
+            2f64.powi(600)
         } else {
             1.0
         };
-        let s: T = amps
-            .iter()
-            .fold(T::cst(0.0), |acc, a| acc + (*a * norm).abs());
+        let norm = if big > 0.0 && big.is_finite() {
+            1.0 / (big * pre)
+        } else {
+            1.0
+        };
+        let unit = |a: T| (a * pre) * norm;
+        let s: T = amps.iter().fold(T::cst(0.0), |acc, a| acc + unit(*a).abs());
         let k = m.scale.abs() * C_SCALE;
-        let coef = |n: T| k * (n * norm) / s;
+        let coef = |n: T| k * unit(n) / s;
         let layer = |n: T, a: T| Layer {
             amp: coef(n),
             inv_rate: a.recip(),

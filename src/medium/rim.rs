@@ -23,7 +23,9 @@ pub(crate) fn rim_weight<T: Real>(dx: T, dz: T, radius: T, edge: T) -> (T, T, T,
         };
         return (w, zero, zero, zero);
     }
-    let (sx, sz) = (dx * (1.0 / big), dz * (1.0 / big));
+    // Divide, not multiply by 1/big: for a subnormal offset (|dx| < 2.2e-308)
+    // 1/big overflows to ∞ and ∞/∞ made ρ̂ NaN (found by fuzzing).
+    let (sx, sz) = (dx / big, dz / big);
     let unit = (sx * sx + sz * sz).sqrt();
     let rho = unit * big;
     let (w, dw) = sigmoid(edge * (radius - rho));

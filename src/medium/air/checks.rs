@@ -10,6 +10,14 @@ use crate::medium::{AirParam, HotField, Param};
 
 /// The wavelengths the formulas are used over (nm).
 pub const WAVELENGTH_RANGE: (f64, f64) = (300.0, 1700.0);
+/// The largest Gladstone–Dale constant (K): about 13× air's 0.079, so that
+/// n − 1 stays below 0.01 for any temperature the checks allow (≥ −150 °C) at
+/// a sea-level pressure. Beyond that no gas is air, and a constant of 10⁸
+/// (found by fuzzing) made n ≈ 10⁵ and the tracer overflow.
+pub const MAX_GLADSTONE_DALE: f64 = 1.0;
+/// The highest pressure at the ground (Pa): 100 atmospheres, far beyond any
+/// weather, where n − 1 is still below 0.1 by every formula.
+pub const MAX_PRESSURE: f64 = 1.0e7;
 /// The heights over which the profile must be air (m).
 const CHECKED_TOP: f64 = 11_000.0;
 
@@ -24,6 +32,15 @@ impl AirMedium<f64> {
         }
         let air = &self.air;
         let t = &air.temperature;
+        if air.pressure > MAX_PRESSURE {
+            return bad(
+                Param::Air(AirParam::Pressure),
+                format!(
+                    "the pressure at the ground must be at most {MAX_PRESSURE} Pa (100 atmospheres), got {}",
+                    air.pressure
+                ),
+            );
+        }
         if air.pressure <= 0.0 {
             return bad(
                 Param::Air(AirParam::Pressure),
@@ -59,11 +76,13 @@ impl AirMedium<f64> {
             );
         }
         if let Formula::GladstoneDale(k) = air.refractivity
-            && k < 0.0
+            && !(0.0..=MAX_GLADSTONE_DALE).contains(&k)
         {
             return bad(
                 Param::Air(AirParam::GladstoneDale),
-                format!("the Gladstone–Dale constant must be ≥ 0 (K), got {k}"),
+                format!(
+                    "the Gladstone–Dale constant must lie in [0, {MAX_GLADSTONE_DALE}] K (air's is about 0.079), got {k}"
+                ),
             );
         }
         if let Some(e) = t.exponential

@@ -1,0 +1,170 @@
+//! One test per crash the fuzz targets found (`fuzz/`, issue #16), named after
+//! the target and what it found, with the input it found (shortened where the
+//! rest did not matter). Each asserted contract is the targets' own: refused
+//! with an input error that names a field or the whole document (exit 2), or
+//! accepted and then finite everywhere; never a panic.
+
+use mirage::error::{Error, WHOLE_DOCUMENT};
+use mirage::io::json::parse_json;
+use mirage::math::V3;
+use mirage::medium::{IndexField, Medium};
+use mirage::problem::Problem;
+use mirage::trace::{Earth, Method, TargetPlane, TraceOptions, trace};
+use std::path::Path;
+
+/// The input error of `e`: exit 2, a field path, a message; and its text has
+/// no `-:` where a field name would go.
+fn named(e: &Error) -> (String, String) {
+    let field = e
+        .field()
+        .unwrap_or_else(|| panic!("not an input error: {e}"));
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(!field.path.is_empty() && !field.message.is_empty(), "{e}");
+    let text = e.to_string();
+    assert!(!text.contains(": -:") && !text.contains(": :"), "{text}");
+    (field.path.clone(), text)
+}
+
+/// `problem`: a key `""` whose colon never came (`{"": "…` cut short) had
+/// an empty field path, printed as `fuzz.json: : expected ...`.
+#[test]
+fn fuzz_problem_unfinished_empty_key_names_the_document() {
+    let text = "{\n  \"\"description\"\u{1a}bwarm fia";
+    let e = Problem::parse(text, Path::new("fuzz.json")).unwrap_err();
+    let (path, message) = named(&e);
+    assert_eq!(path, WHOLE_DOCUMENT);
+    assert!(message.contains("line 2"), "{message}");
+}
+
+/// `problem` and `scene`: an unknown key `""` at the top level had an empty
+/// path too (`unknown field ``, expected one of ...`).
+#[test]
+fn fuzz_problem_and_scene_empty_unknown_key_names_the_document() {
+    let problem = r#"{"name": "x", "": 1, "medium": {"scale": 0.02}, "pairs": []}"#;
+    let e = Problem::parse(problem, Path::new("fuzz.json")).unwrap_err();
+    let (path, message) = named(&e);
+    assert_eq!(path, WHOLE_DOCUMENT);
+    assert!(message.contains("unknown field ``"), "{message}");
+
+    let scene = r#"{"name": "x", "": {"method": "auto"}}"#;
+    let e = mirage::scene::Scene::parse(scene, Path::new("scene.json")).unwrap_err();
+    let (path, _) = named(&e);
+    assert_eq!(path, WHOLE_DOCUMENT);
+}
+
+/// `fit_result`: a result file broken inside a nested key
+/// (`{"": {"temperatuson", ...`) named no field either.
+#[test]
+fn fuzz_fit_result_broken_nested_key_names_the_document() {
+    let text = r#"{"": {"temperatuson", "medium": {"air": {}}}}"#;
+    let e =
+        parse_json::<serde_json::Value>(text, Path::new("result.json"), "fit result").unwrap_err();
+    let (path, message) = named(&e);
+    assert_eq!(path, WHOLE_DOCUMENT);
+    assert!(message.contains("column"), "{message}");
+}
+
+/// `air`: a Gladstone–Dale constant of 99,475,020 K made n ≈ 3.5·10⁵, and a
+/// ray's endpoint overflowed to ∞ with a NaN direction. Constants above 1 K
+/// (13× air's) are refused by name, as are pressures above 10⁷ Pa.
+#[test]
+fn fuzz_air_huge_gladstone_dale_constant_is_refused() {
+    let parse = |text: &str| -> Result<(), Error> {
+        let path = Path::new("medium.json");
+        let m: Medium = parse_json(text, path, "medium")?;
+        m.validate().map_err(|e| e.in_file(path))
+    };
+    let air = |k: &str, p: &str| {
+        format!(
+            r#"{{"air": {{"temperature": {{"base": 10.233, "exponential": {{"delta": 0.0, "scale_height": 0.04}}}}, "pressure": {p}, "refractivity": {{"gladstone_dale": {k}}}}}}}"#
+        )
+    };
+    let e = parse(&air("99475020", "101325")).unwrap_err();
+    let (path, message) = named(&e);
+    assert_eq!(path, "air.refractivity.gladstone_dale");
+    assert!(message.contains("0.079"), "{message}");
+    let e = parse(&air("0.079", "1e9")).unwrap_err();
+    assert_eq!(named(&e).0, "air.pressure");
+    // The largest allowed constant at the highest pressure still traces finitely.
+    let path = Path::new("medium.json");
+    let m: Medium = parse_json(&air("1.0", "1e7"), path, "medium").unwrap();
+    m.validate().unwrap();
+    let field = m.field();
+    for elevation in [-0.01_f64, 0.0, 0.1, 89.0, 90.0] {
+        let e = elevation.to_radians();
+        let d = V3::new(0.0, e.sin(), e.cos());
+        let o = V3::new(0.0, 1.5, 0.0);
+        let mut opts = TraceOptions::new(Method::Rk4 { step: 5.0 });
+        opts.max_steps = 20_000;
+        opts.max_length = Some(1200.0);
+        let plane = TargetPlane {
+            point: o + V3::new(0.0, 0.0, 300.0),
+            normal: V3::new(0.0, 0.0, 1.0),
+        };
+        let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
+        assert!(
+            t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
+            "{elevation}°: {t:?}"
+        );
+    }
+}
+
+/// `structured`: a logistic medium of extreme but valid numbers (scale
+/// 4.7·10⁻³⁰⁸, an inversion of amplitude 10¹⁹³ and rate 8.9·10⁻⁶ m at the
+/// ground, a hot spot of radius 0) and a ray from the ground at x = 10⁻³²¹:
+/// its direction became NaN.
+#[test]
+fn fuzz_structured_subnormal_scale_ray_stays_finite() {
+    let text = r#"{"scale": 4.729372673361406e-308,
+        "inversion": {"n": 1.0234173826077954e193, "a": 8.901960784313726e-6, "height": 0.0},
+        "hotspots": [{"x": 0.0, "z": 0.0, "radius": 0.0, "n": 0.0, "a": -0.00028896009765774013, "edge": 9692.072938124667}]}"#;
+    let path = Path::new("structured.json");
+    let m: Medium = parse_json(text, path, "medium").unwrap();
+    if let Err(e) = m.validate() {
+        // Refusing it by name is a valid answer too.
+        named(&e.in_file(path));
+        return;
+    }
+    let field = m.field();
+    let o = V3::new(1.27e-321, 0.0, 0.0);
+    let d = V3::new(-0.479425538604203, 0.0, 0.8775825618903728);
+    let (delta, grad) = field.delta_gradient(o);
+    assert!(
+        delta.is_finite() && grad.is_finite(),
+        "δ {delta}, ∇δ {grad:?}"
+    );
+    let mut opts = TraceOptions::new(Method::Rk4 { step: 0.01 });
+    opts.max_steps = 20_000;
+    opts.max_length = Some(4.0);
+    opts.earth = Earth::Flat;
+    let plane = TargetPlane {
+        point: o + V3::new(0.0, 0.0, 1.0),
+        normal: V3::new(0.0, 0.0, 1.0),
+    };
+    let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
+    assert!(
+        t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
+        "{t:?}"
+    );
+}
+
+/// The same hunt, one step on: amplitudes that are all subnormal had no
+/// finite 1/max|n| in the normalisation by S, and δ was NaN. Only the ratios
+/// n/S matter, so such a medium is the one with n = 1.
+#[test]
+fn fuzz_structured_subnormal_amplitudes_keep_their_ratios() {
+    let path = Path::new("structured.json");
+    let at = |n: &str| {
+        let text = format!(
+            r#"{{"scale": 0.02, "background": {{"n": {n}, "a": 150.0}}, "hotspots": [{{"x": 0.0, "z": 100.0, "radius": 50.0, "n": -{n}, "a": -0.5, "edge": 0.5}}]}}"#
+        );
+        let m: Medium = parse_json(&text, path, "medium").unwrap();
+        m.validate().unwrap();
+        m.field().delta_gradient(V3::new(3.0, 0.7, 90.0))
+    };
+    let (d1, g1) = at("1.0");
+    let (d0, g0) = at("1e-310");
+    assert!(d0.is_finite() && g0.is_finite(), "δ {d0}, ∇δ {g0:?}");
+    assert!((d0 - d1).abs() <= 1e-15 * d1.abs(), "{d0} vs {d1}");
+    assert!((g0 - g1).norm() <= 1e-12 * g1.norm(), "{g0:?} vs {g1:?}");
+}
