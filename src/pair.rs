@@ -36,6 +36,69 @@ fn is_one(w: &f64) -> bool {
     *w == 1.0
 }
 
+/// One pair as a problem file holds it: the [`PointPair`] and, optionally,
+/// the noise σ of its endpoint, which only a grown model's criterion reads
+/// (`crate::fit::grow`). [`PointPair`] itself has no noise: it is what is
+/// traced.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairEntry {
+    /// The observer (metres).
+    pub origin: [f64; 3],
+    /// A point on the line of sight, which fixes the launch direction.
+    pub through: [f64; 3],
+    /// The point the observer must see.
+    pub target: [f64; 3],
+    /// Weight of this pair's residual (default 1).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub weight: f64,
+    /// The vacuum wavelength (nm) this pair is seen at (real air only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wavelength: Option<f64>,
+    /// The endpoint noise σᵢ (metres, per component in the target plane)
+    /// of this pair; absent: the problem's `solver.noise`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+}
+
+impl PairEntry {
+    /// The pair to trace.
+    pub fn pair(&self) -> PointPair {
+        PointPair {
+            origin: self.origin,
+            through: self.through,
+            target: self.target,
+            weight: self.weight,
+            wavelength: self.wavelength,
+        }
+    }
+
+    /// [`PointPair::validate`], and the noise (if any) finite and > 0.
+    pub fn validate(&self) -> Result<(), FieldError> {
+        self.pair().validate()?;
+        match self.noise {
+            Some(s) if !(s.is_finite() && s > 0.0) => Err(FieldError::new(
+                "noise",
+                format!("must be a finite number > 0 (metres), got {s}"),
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl From<PointPair> for PairEntry {
+    fn from(p: PointPair) -> Self {
+        PairEntry {
+            origin: p.origin,
+            through: p.through,
+            target: p.target,
+            weight: p.weight,
+            wavelength: p.wavelength,
+            noise: None,
+        }
+    }
+}
+
 impl PointPair {
     /// Checks the pair's geometry: finite coordinates, `through` ≠ `origin`, the
     /// target not straight above or below the origin, a non-negative weight,

@@ -20,7 +20,7 @@
 //! | `medium` | the starting medium ([`Medium`]: the logistic model of `docs/model.md`); a term left out is not modelled |
 //! | `free` | parameters the fit may change, by path name; absent: trace and report only |
 //! | `bounds` | optional `[low, high]` per free parameter |
-//! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight`, optional `wavelength` (nm, real air only: the pair is traced with `air.wavelength` replaced by it) |
+//! | `pairs` | point pairs: `origin`, `through`, `target` (metres), optional `weight`, optional `wavelength` (nm, real air only: the pair is traced with `air.wavelength` replaced by it), optional `noise` (σᵢ, m: the grown model's criterion) |
 //! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
 //! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12), `simplex_xtol`, `simplex_ftol`; `grow`, `noise`, `max_terms` (`crate::fit::grow`) |
 
@@ -36,7 +36,7 @@ pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
 use crate::error::{Error, Result};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::{Medium, Param};
-use crate::pair::PointPair;
+use crate::pair::{PairEntry, PointPair};
 use crate::trace::{Earth, EarthSpec, TraceOptions};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -60,8 +60,8 @@ pub struct ProblemFile {
     /// Bounds per free parameter.
     #[serde(default)]
     pub bounds: BTreeMap<String, [f64; 2]>,
-    /// The point pairs.
-    pub pairs: Vec<PointPair>,
+    /// The point pairs, each with its optional endpoint noise.
+    pub pairs: Vec<PairEntry>,
     /// Integration settings.
     #[serde(default)]
     pub trace: TraceSpec,
@@ -90,6 +90,9 @@ pub struct Problem {
     pub bounds: Vec<(f64, f64)>,
     /// The point pairs.
     pub pairs: Vec<PointPair>,
+    /// Per pair, its endpoint noise σᵢ (m) when the file gives one
+    /// (`pairs[i].noise`; the grown model's criterion, `crate::fit::grow`).
+    pub pair_noise: Vec<Option<f64>>,
     /// Integration settings, the ground (`earth`) included.
     pub trace: TraceOptions,
     /// The `trace` section, normalised (echoed in results).
@@ -124,7 +127,7 @@ impl Problem {
         let earth = Earth::from(file.earth);
         for (i, pair) in file.pairs.iter().enumerate() {
             pair.validate()
-                .and_then(|()| pair.validate_on(earth))
+                .and_then(|()| pair.pair().validate_on(earth))
                 .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
             if pair.wavelength.is_some() && !file.medium.is_dispersive() {
                 return Err(bad(
@@ -224,7 +227,8 @@ impl Problem {
             medium: file.medium,
             free,
             bounds,
-            pairs: file.pairs,
+            pairs: file.pairs.iter().map(PairEntry::pair).collect(),
+            pair_noise: file.pairs.iter().map(|p| p.noise).collect(),
             trace,
             trace_spec,
             solver,
