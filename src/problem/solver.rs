@@ -173,7 +173,8 @@ pub fn check_max_terms(v: usize) -> std::result::Result<usize, ValueError> {
 }
 
 /// Why `medium` cannot be grown (`crate::fit::grow`), if it cannot: growing
-/// adds terms of the logistic model, scaled against the terms already there.
+/// adds terms of the logistic model (scaled against the terms already there)
+/// or of real air (temperature terms in kelvins).
 pub fn grow_unsupported(medium: &Medium) -> Option<String> {
     match medium {
         Medium::Logistic(m) if m.amplitude_sum() > 0.0 => None,
@@ -181,8 +182,9 @@ pub fn grow_unsupported(medium: &Medium) -> Option<String> {
             "growing starts from a medium with at least one term (a background): the terms it adds are scaled against it"
                 .into(),
         ),
+        Medium::Air(_) => None,
         other => Some(format!(
-            "growing adds terms of the logistic model (an inversion, hot spots); this medium is the {} model",
+            "growing adds terms of the logistic model (an inversion, hot spots) or of real air (a surface layer, an inversion, hot spots in kelvins); this medium is the {} model",
             other.kind_name()
         )),
     }

@@ -6,20 +6,35 @@
 //!   or, if it stays above it, to its lowest point before the target's
 //!   distance: a hot spot that turned the ray up lies there. A seed is a spot
 //!   centred under that point with radius [`RADIUS_SHARES`] of its distance
-//!   from the observer, strength −2·S (S the current amplitude sum: the spot
-//!   twice the rest, as in the bundled hot road) and vertical rate −0.4 × the
-//!   lowest observer's height (the hot layer below the eyes).
+//!   from the observer. Logistic: strength −2·S (S the current amplitude sum:
+//!   the spot twice the rest, as in the bundled hot road) and vertical rate
+//!   −0.4 × the lowest observer's height (the hot layer below the eyes). Real
+//!   air: excesses of [`AIR_SPOT_DELTAS`] K and a scale height of
+//!   [`AIR_SCALE_SHARE`] × the lowest observer's height.
 //! - **Inversion**: a layer at heights spread over the rays' height range
 //!   (origins, `through` points and targets), a quarter of the range apart, of
-//!   either sign, its rate an eighth of the range.
+//!   either sign. Logistic: amplitude ±S, rate an eighth of the range. Real
+//!   air (`air.temperature.inversion`): a step of ±[`AIR_DELTAS`] K, its
+//!   thickness an eighth of the range.
+//! - **Surface layer** (real air only, `air.temperature.exponential`): an
+//!   excess of ±[`AIR_DELTAS`] K at the ground, its scale height
+//!   [`SURFACE_SHARES`] of the lowest observer's height (a layer below the
+//!   eyes, as over a warm road or a cold sea).
 //!
-//! Bounds keep every seed's fit in the scene: centres within the pairs' box
-//! widened by half its size, radii from 0.5 m to the longest pair's distance,
-//! rates of the seeded sign (a rate never crosses zero, where the model is
-//! undefined), layers within the height range widened by its size.
+//! Real air with a measured profile (`temperature.table`) grows hot spots
+//! only: validation refuses analytic terms beside a table.
+//!
+//! Bounds keep every seed's fit in the scene and the medium's domain: centres
+//! within the pairs' box widened by half its size, radii from 0.5 m to the
+//! longest pair's distance, logistic rates of the seeded sign (a rate never
+//! crosses zero, where the model is undefined), scale heights and thicknesses
+//! from 1 mm up to ten times the height range (> 0, as real air requires),
+//! excesses within ±[`AIR_MAX_DELTA`] K (far from −150 °C), layers within the
+//! height range widened by its size.
 
 use super::model::{Model, Term};
-use crate::medium::{HotSpot, Inversion};
+use crate::medium::air::{AirHotSpot, Exponential, Step};
+use crate::medium::{HotSpot, Inversion, Medium};
 use crate::pair::PointPair;
 
 /// How many of the worst-fitting pairs seed hot spots.
@@ -32,6 +47,24 @@ pub const RADIUS_SHARES: [f64; 2] = [0.1, 0.25];
 /// wide, smooth enough that a seed's rays feel the rim move, and one the
 /// pairs rarely determine (see the README, "Growing the model").
 pub const GROWN_EDGE: f64 = 0.5;
+
+/// The magnitudes (K) of a real-air layer's seeds, each of either sign.
+pub const AIR_DELTAS: [f64; 2] = [1.0, 5.0];
+
+/// The excesses (K) of a real-air hot spot's seeds: hot patches, a warm one
+/// and one as hot as a road's surface air in the sun.
+pub const AIR_SPOT_DELTAS: [f64; 2] = [5.0, 15.0];
+
+/// A real-air hot spot seed's scale height, as a share of the lowest
+/// observer's height.
+pub const AIR_SCALE_SHARE: f64 = 0.25;
+
+/// A real-air surface layer's seed scale heights, as shares of the lowest
+/// observer's height.
+pub const SURFACE_SHARES: [f64; 2] = [0.05, 0.25];
+
+/// The bound (K) on a grown real-air excess, either sign.
+pub const AIR_MAX_DELTA: f64 = 50.0;
 
 /// A term to try, with the models its fits start from.
 #[derive(Clone, Debug)]
@@ -115,27 +148,63 @@ pub fn lowest_ground_point(pair: &PointPair) -> (f64, f64, f64) {
 /// norms `misfit` (one per pair, in order).
 pub fn propose(model: &Model, pairs: &[PointPair], misfit: &[f64]) -> Vec<Candidate> {
     let scene = Scene::of(pairs);
-    let s = model.medium.amplitude_sum().max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
-    if model.medium.inversion.is_none() {
-        out.push(Candidate {
-            term: Term::Inversion,
-            seeds: inversion_seeds(model, &scene, s),
-        });
+    let centres = worst_centres(pairs, misfit);
+    match &model.medium {
+        Medium::Logistic(m) => {
+            let s = m.amplitude_sum().max(f64::MIN_POSITIVE);
+            if m.inversion.is_none() {
+                out.push(Candidate {
+                    term: Term::Inversion,
+                    seeds: inversion_seeds(model, &scene, s),
+                });
+            }
+            out.push(Candidate {
+                term: Term::HotSpot(m.hotspots.len()),
+                seeds: hot_spot_seeds(model, &centres, &scene, s),
+            });
+        }
+        Medium::Air(m) => {
+            let t = &m.air.temperature;
+            // A table takes no analytic term beside it.
+            let analytic = t.table.is_none();
+            if analytic && t.exponential.is_none() {
+                out.push(Candidate {
+                    term: Term::SurfaceLayer,
+                    seeds: surface_seeds(model, &scene),
+                });
+            }
+            if analytic && t.inversion.is_none() {
+                out.push(Candidate {
+                    term: Term::Inversion,
+                    seeds: air_inversion_seeds(model, &scene),
+                });
+            }
+            out.push(Candidate {
+                term: Term::HotSpot(m.hotspots.len()),
+                seeds: air_hot_spot_seeds(model, &centres, &scene),
+            });
+        }
+        Medium::LinearSquare(_) => {}
     }
-    let seeds = hot_spot_seeds(model, pairs, misfit, &scene, s);
-    if !seeds.is_empty() {
-        out.push(Candidate {
-            term: Term::HotSpot(model.medium.hotspots.len()),
-            seeds,
-        });
-    }
+    out.retain(|c| !c.seeds.is_empty());
     out
 }
 
-fn inversion_seeds(model: &Model, scene: &Scene, s: f64) -> Vec<Model> {
+/// The seed heights of a layer: spread over the rays' height range, a
+/// quarter of it apart; and the range's size.
+fn layer_heights(scene: &Scene) -> ([f64; 4], f64) {
     let (lo, hi) = scene.heights;
     let span = (hi - lo).max(1.0);
+    (
+        std::array::from_fn(|k| lo + (k as f64 + 0.5) / 4.0 * span),
+        span,
+    )
+}
+
+fn inversion_seeds(model: &Model, scene: &Scene, s: f64) -> Vec<Model> {
+    let (heights, span) = layer_heights(scene);
+    let (lo, hi) = scene.heights;
     let bounds = [
         (f64::NEG_INFINITY, f64::INFINITY),
         (1e-3, 10.0 * span),
@@ -143,11 +212,11 @@ fn inversion_seeds(model: &Model, scene: &Scene, s: f64) -> Vec<Model> {
     ];
     let mut seeds = Vec::new();
     for sign in [1.0, -1.0] {
-        for k in 0..4 {
+        for height in heights {
             let layer = Inversion {
                 n: sign * s,
                 a: span / 8.0,
-                height: lo + (k as f64 + 0.5) / 4.0 * span,
+                height,
             };
             seeds.push(model.with_inversion(layer, bounds));
         }
@@ -155,30 +224,57 @@ fn inversion_seeds(model: &Model, scene: &Scene, s: f64) -> Vec<Model> {
     seeds
 }
 
-fn hot_spot_seeds(
-    model: &Model,
-    pairs: &[PointPair],
-    misfit: &[f64],
-    scene: &Scene,
-    s: f64,
-) -> Vec<Model> {
+/// The signed seed excesses of a real-air layer: each of [`AIR_DELTAS`],
+/// warm then cold.
+fn air_deltas() -> impl Iterator<Item = f64> {
+    AIR_DELTAS.into_iter().flat_map(|d| [d, -d])
+}
+
+fn air_inversion_seeds(model: &Model, scene: &Scene) -> Vec<Model> {
+    let (heights, span) = layer_heights(scene);
+    let (lo, hi) = scene.heights;
+    let bounds = [
+        (-AIR_MAX_DELTA, AIR_MAX_DELTA),
+        (lo - span, hi + span),
+        (1e-3, 10.0 * span),
+    ];
+    let mut seeds = Vec::new();
+    for delta in air_deltas() {
+        for height in heights {
+            let step = Step {
+                delta,
+                height,
+                thickness: span / 8.0,
+            };
+            seeds.push(model.with_air_inversion(step, bounds));
+        }
+    }
+    seeds
+}
+
+fn surface_seeds(model: &Model, scene: &Scene) -> Vec<Model> {
+    let (_, span) = layer_heights(scene);
+    let bounds = [(-AIR_MAX_DELTA, AIR_MAX_DELTA), (1e-3, 10.0 * span)];
+    let eyes = scene.lowest_origin.max(0.1);
+    let mut seeds = Vec::new();
+    for delta in air_deltas() {
+        for share in SURFACE_SHARES {
+            let layer = Exponential {
+                delta,
+                scale_height: share * eyes,
+            };
+            seeds.push(model.with_surface_layer(layer, bounds));
+        }
+    }
+    seeds
+}
+
+/// The seed centres of a hot spot: under the [`WORST_PAIRS`] worst pairs'
+/// launch lines (see [`lowest_ground_point`]), one per place.
+fn worst_centres(pairs: &[PointPair], misfit: &[f64]) -> Vec<(f64, f64, f64)> {
     let mut order: Vec<usize> = (0..pairs.len()).collect();
     // Worst first; the index breaks ties, so the order is reproducible.
     order.sort_by(|&i, &j| misfit[j].total_cmp(&misfit[i]).then(i.cmp(&j)));
-    let (wx, wz) = (
-        0.5 * (scene.x.1 - scene.x.0).max(scene.reach),
-        0.5 * (scene.z.1 - scene.z.0).max(scene.reach),
-    );
-    let rate = -0.4 * scene.lowest_origin.max(0.1);
-    let bounds = |_: f64| {
-        [
-            (scene.x.0 - wx, scene.x.1 + wx),
-            (scene.z.0 - wz, scene.z.1 + wz),
-            (0.5, scene.reach.max(1.0)),
-            (f64::NEG_INFINITY, f64::INFINITY),
-            (-10.0 * scene.heights.1.abs().max(1.0), -1e-3),
-        ]
-    };
     let mut centres: Vec<(f64, f64, f64)> = Vec::new();
     for &i in order.iter().take(WORST_PAIRS) {
         let c = lowest_ground_point(&pairs[i]);
@@ -190,19 +286,74 @@ fn hot_spot_seeds(
             centres.push(c);
         }
     }
+    centres
+}
+
+/// The bounds of a hot spot's centre (x, z) and radius.
+fn spot_box(scene: &Scene) -> [(f64, f64); 3] {
+    let (wx, wz) = (
+        0.5 * (scene.x.1 - scene.x.0).max(scene.reach),
+        0.5 * (scene.z.1 - scene.z.0).max(scene.reach),
+    );
+    [
+        (scene.x.0 - wx, scene.x.1 + wx),
+        (scene.z.0 - wz, scene.z.1 + wz),
+        (0.5, scene.reach.max(1.0)),
+    ]
+}
+
+fn air_hot_spot_seeds(model: &Model, centres: &[(f64, f64, f64)], scene: &Scene) -> Vec<Model> {
+    let [x, z, r] = spot_box(scene);
+    let (_, span) = layer_heights(scene);
+    let bounds = [
+        x,
+        z,
+        r,
+        (-AIR_MAX_DELTA, AIR_MAX_DELTA),
+        (1e-3, 10.0 * span),
+    ];
+    let scale_height = AIR_SCALE_SHARE * scene.lowest_origin.max(0.1);
     let mut seeds = Vec::new();
-    for (x, z, dist) in centres {
+    for &(x, z, dist) in centres {
         for share in RADIUS_SHARES {
-            let radius = (share * dist).max(1.0);
+            for delta in AIR_SPOT_DELTAS {
+                let spot = AirHotSpot {
+                    x,
+                    z,
+                    radius: (share * dist).max(1.0),
+                    edge: GROWN_EDGE,
+                    delta,
+                    scale_height,
+                };
+                seeds.push(model.with_air_hot_spot(spot, bounds));
+            }
+        }
+    }
+    seeds
+}
+
+fn hot_spot_seeds(model: &Model, centres: &[(f64, f64, f64)], scene: &Scene, s: f64) -> Vec<Model> {
+    let [x, z, r] = spot_box(scene);
+    let bounds = [
+        x,
+        z,
+        r,
+        (f64::NEG_INFINITY, f64::INFINITY),
+        (-10.0 * scene.heights.1.abs().max(1.0), -1e-3),
+    ];
+    let rate = -0.4 * scene.lowest_origin.max(0.1);
+    let mut seeds = Vec::new();
+    for &(x, z, dist) in centres {
+        for share in RADIUS_SHARES {
             let spot = HotSpot {
                 x,
                 z,
-                radius,
+                radius: (share * dist).max(1.0),
                 n: -2.0 * s,
                 a: rate,
                 edge: GROWN_EDGE,
             };
-            seeds.push(model.with_hot_spot(spot, bounds(radius)));
+            seeds.push(model.with_hot_spot(spot, bounds));
         }
     }
     seeds

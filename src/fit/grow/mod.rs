@@ -5,8 +5,11 @@
 //! # Algorithm
 //!
 //! 1. Fit the starting model (the problem's medium and `free`).
-//! 2. Propose candidates ([`candidates`]): the inversion, if the medium has
-//!    none, and one more hot spot, each with several seeds.
+//! 2. Propose candidates ([`candidates`]), each with several seeds. The
+//!    logistic model: the inversion, if the medium has none, and one more hot
+//!    spot. Real air: the surface layer (`air.temperature.exponential`) and
+//!    the step aloft (`air.temperature.inversion`), each if absent and the
+//!    temperature is no table, and one more hot spot in kelvins.
 //! 3. Fit every (candidate, seed) with Levenberg–Marquardt
 //!    ([`crate::fit::solve::run_lm`]), all of them at once with rayon. Each
 //!    fit is deterministic and independent of the thread count (the residual
@@ -27,7 +30,11 @@
 //! target plane, so one of its three components is zero). With the endpoint
 //! noise σ known (`--noise`), χ² = 2F/σ² and the criterion is the Bayesian
 //! information criterion BIC = χ² + p·ln m (p free parameters); with σ unknown,
-//! BIC = m·ln(2F/m) + p·ln m. BIC rather than AICc: AICc's penalty per
+//! BIC = m·ln(2F/m) + p·ln m. When pairs carry their own σᵢ
+//! (`pairs[i].noise`; a pair without one takes `--noise`), χ² =
+//! Σᵢ |rᵢ|²/(wᵢσᵢ)² over the weighted residuals rᵢ = wᵢ·(eᵢ − tᵢ), that is
+//! Σᵢ |eᵢ − tᵢ|²/σᵢ² (a pair of weight 0 counts nothing). The fits still
+//! minimise F; weights wᵢ ∝ 1/σᵢ make F's minimum χ²'s. BIC rather than AICc: AICc's penalty per
 //! parameter is about 2 for m in the tens to hundreds, BIC's ln m is 3.7–6,
 //! and a spurious hot spot (5 parameters, which can always absorb some noise)
 //! lowers χ² by about its p — by chance often more than 2p, rarely more than
@@ -44,7 +51,12 @@
 //! proposed nor kept. Hot spots are seeded only under the worst-fitting
 //! pairs' launch lines: a spot whose rays already fit well after an earlier
 //! term bent them is not proposed. A grown hot spot's rim sharpness is fixed
-//! ([`candidates::GROWN_EDGE`]). Only the logistic model grows.
+//! ([`candidates::GROWN_EDGE`]). Real air grows only its temperature:
+//! the surface layer, the step aloft and hot spots, never a lapse, a table,
+//! the pressure or the humidity, and nothing but hot spots beside a table; a
+//! grown real-air term's excess stays within ±[`candidates::AIR_MAX_DELTA`] K.
+//! The logistic model needs a term to start from (a background). Other kinds
+//! do not grow.
 
 pub mod candidates;
 pub mod model;
@@ -68,43 +80,109 @@ pub const MAX_STEPS: usize = 16;
 /// Iteration limit of one candidate fit (at most the problem's).
 const CANDIDATE_ITERATIONS: u64 = 100;
 
+/// What the criterion knows of the endpoint noise.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Noise {
+    /// σ unknown: estimated from the residuals.
+    Unknown,
+    /// One σ (m) for every pair: χ² = 2F/σ².
+    Uniform(f64),
+    /// A σᵢ per pair: χ² = Σᵢ kᵢ·|rᵢ|² with kᵢ = 1/(wᵢσᵢ)² held here, one per
+    /// pair (0 for a pair of weight 0, whose residual is 0).
+    PerPair(Vec<f64>),
+}
+
 /// The information criterion of least squares with endpoint noise σ.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Criterion {
-    /// σ (m), if known.
-    pub noise: Option<f64>,
+    /// The noise.
+    pub noise: Noise,
     /// Residual components m.
     pub m: usize,
 }
 
 impl Criterion {
+    /// The criterion of `problem`'s pairs with the global σ `noise`
+    /// (`--noise`, `solver.noise`): per-pair σᵢ when some pair carries one
+    /// (then every pair must have one, its own or the global one).
+    pub fn of(problem: &Problem, noise: Option<f64>) -> Result<Criterion> {
+        let m = 2 * problem.pairs.len();
+        let own = |i: usize| problem.pair_noise.get(i).copied().flatten();
+        let with_own = (0..problem.pairs.len())
+            .filter(|&i| own(i).is_some())
+            .count();
+        if with_own == 0 {
+            let noise = noise.map_or(Noise::Unknown, Noise::Uniform);
+            return Ok(Criterion { noise, m });
+        }
+        let mut k = Vec::with_capacity(problem.pairs.len());
+        for (i, pair) in problem.pairs.iter().enumerate() {
+            let Some(sigma) = own(i).or(noise) else {
+                return Err(Error::input(
+                    &problem.source,
+                    "solver.noise",
+                    format!(
+                        "{with_own} of {} pairs carry their own `noise` but pairs[{i}] does not: give every pair a `noise`, or a σ for the rest in `solver.noise` (or --noise)",
+                        problem.pairs.len()
+                    ),
+                ));
+            };
+            let ws = pair.weight * sigma;
+            k.push(if pair.weight > 0.0 {
+                1.0 / (ws * ws)
+            } else {
+                0.0
+            });
+        }
+        Ok(Criterion {
+            noise: Noise::PerPair(k),
+            m,
+        })
+    }
+
     /// The criterion in words.
     pub fn describe(&self) -> String {
-        match self.noise {
-            Some(s) => format!("BIC, σ = {s} m known: χ² + p·ln m, χ² = 2F/σ²"),
-            None => "BIC, σ estimated: m·ln(2F/m) + p·ln m".into(),
+        match &self.noise {
+            Noise::Uniform(s) => format!("BIC, σ = {s} m known: χ² + p·ln m, χ² = 2F/σ²"),
+            Noise::PerPair(_) => "BIC, σᵢ per pair known: χ² + p·ln m, χ² = Σ|rᵢ|²/(wᵢσᵢ)²".into(),
+            Noise::Unknown => "BIC, σ estimated: m·ln(2F/m) + p·ln m".into(),
         }
     }
 
-    /// χ² = 2F/σ², if σ is known.
-    pub fn chi2(&self, f: f64) -> Option<f64> {
-        self.noise.map(|s| 2.0 * f / (s * s))
+    /// Whether χ² needs each pair's |rᵢ|², not only F.
+    pub fn needs_pairs(&self) -> bool {
+        matches!(self.noise, Noise::PerPair(_))
     }
 
-    /// The criterion of a fit with objective `f` and `p` free parameters.
-    pub fn value(&self, f: f64, p: usize) -> f64 {
+    /// χ² of a fit with objective `f` and per-pair |rᵢ|² `pair_sq` (read only
+    /// with per-pair σᵢ), if σ is known.
+    pub fn chi2(&self, f: f64, pair_sq: &[f64]) -> Option<f64> {
+        match &self.noise {
+            Noise::Unknown => None,
+            Noise::Uniform(s) => Some(2.0 * f / (s * s)),
+            Noise::PerPair(_) if !f.is_finite() => Some(f64::INFINITY),
+            Noise::PerPair(k) => {
+                let c: f64 = k.iter().zip(pair_sq).map(|(k, r2)| k * r2).sum();
+                Some(if c.is_finite() { c } else { f64::INFINITY })
+            }
+        }
+    }
+
+    /// The criterion of a fit with objective `f`, χ² `chi2` (from
+    /// [`Criterion::chi2`]) and `p` free parameters.
+    pub fn value(&self, f: f64, chi2: Option<f64>, p: usize) -> f64 {
         let m = self.m as f64;
         let penalty = p as f64 * m.ln();
-        match self.chi2(f) {
+        match chi2 {
             Some(c) => c + penalty,
             None => m * (2.0 * f / m).max(f64::MIN_POSITIVE).ln() + penalty,
         }
     }
 
     /// Whether χ² is within the noise floor (`None` when σ is unknown).
-    pub fn at_floor(&self, f: f64, p: usize) -> Option<bool> {
+    pub fn at_floor(&self, chi2: Option<f64>, p: usize) -> Option<bool> {
         let dof = self.m.saturating_sub(p).max(1) as f64;
-        self.chi2(f).map(|c| c <= dof + 2.0 * (2.0 * dof).sqrt())
+        chi2.map(|c| c <= dof + 2.0 * (2.0 * dof).sqrt())
     }
 }
 
@@ -117,6 +195,8 @@ pub struct Fitted {
     pub start: Model,
     /// F (m²).
     pub objective: f64,
+    /// χ², when σ is known.
+    pub chi2: Option<f64>,
     /// The criterion.
     pub criterion: f64,
 }
@@ -146,7 +226,7 @@ fn fit_model(
     criterion: &Criterion,
 ) -> Result<Fitted> {
     let objective = Objective::new(
-        Medium::Logistic(model.medium.clone()),
+        model.medium.clone(),
         model.free.clone(),
         problem.pairs.clone(),
         problem.trace,
@@ -165,11 +245,18 @@ fn fit_model(
         }
     };
     let f = if f.is_finite() { f } else { f64::INFINITY };
+    let pair_sq = if criterion.needs_pairs() && f.is_finite() {
+        pair_norms(&objective.residuals(&x).0)
+    } else {
+        vec![]
+    };
+    let chi2 = criterion.chi2(f, &pair_sq);
     Ok(Fitted {
         start: model.clone(),
         model: model.at(&x),
         objective: f,
-        criterion: criterion.value(f, model.free.len()),
+        chi2,
+        criterion: criterion.value(f, chi2, model.free.len()),
     })
 }
 
@@ -197,19 +284,24 @@ fn argmin(keys: impl IntoIterator<Item = f64>) -> Option<usize> {
     best.map(|(i, _)| i)
 }
 
+/// Per pair, |rᵢ|² of the residual vector `r` (three components a pair).
+fn pair_norms(r: &nalgebra::DVector<f64>) -> Vec<f64> {
+    r.as_slice()
+        .chunks(3)
+        .map(|c| c.iter().map(|v| v * v).sum::<f64>())
+        .collect()
+}
+
 /// Per pair, |rᵢ| at the fitted model.
 fn misfits(problem: &Problem, fitted: &Fitted) -> Vec<f64> {
     let objective = Objective::new(
-        Medium::Logistic(fitted.model.medium.clone()),
+        fitted.model.medium.clone(),
         vec![],
         problem.pairs.clone(),
         problem.trace,
     );
     let (r, _) = objective.residuals(&[]);
-    r.as_slice()
-        .chunks(3)
-        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
-        .collect()
+    pair_norms(&r).into_iter().map(f64::sqrt).collect()
 }
 
 /// The grown term of `fitted` with a parameter the pairs do not determine.
@@ -219,7 +311,7 @@ fn undetermined_term(problem: &Problem, fitted: &Fitted) -> Option<Term> {
         return None;
     }
     let objective = Objective::new(
-        Medium::Logistic(model.medium.clone()),
+        model.medium.clone(),
         model.free.clone(),
         problem.pairs.clone(),
         problem.trace,
@@ -241,7 +333,6 @@ fn step_record(
     step: usize,
     action: String,
     fitted: &Fitted,
-    criterion: &Criterion,
     candidates: Vec<CandidateReport>,
 ) -> GrowStep {
     GrowStep {
@@ -250,7 +341,7 @@ fn step_record(
         terms: fitted.model.terms(),
         free: fitted.model.free.iter().map(|p| p.to_string()).collect(),
         objective: fitted.objective,
-        chi2: criterion.chi2(fitted.objective),
+        chi2: fitted.chi2,
         criterion: fitted.criterion,
         candidates,
     }
@@ -264,35 +355,28 @@ pub fn unsupported(medium: &Medium) -> Option<String> {
 
 /// The starting model of `problem`: its medium and free parameters.
 fn start_model(problem: &Problem) -> Result<Model> {
-    match (&problem.medium, unsupported(&problem.medium)) {
-        (Medium::Logistic(medium), None) => Ok(Model {
-            medium: medium.clone(),
+    match unsupported(&problem.medium) {
+        None => Ok(Model {
+            medium: problem.medium.clone(),
             free: problem.free.clone(),
             bounds: problem.bounds.clone(),
             grown: vec![],
         }),
-        (_, reason) => Err(Error::input(
-            &problem.source,
-            "solver.grow",
-            reason.unwrap_or_default(),
-        )),
+        Some(reason) => Err(Error::input(&problem.source, "solver.grow", reason)),
     }
 }
 
 /// Grows `problem`'s model as `settings` say (see the module doc).
 pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
     let started = Instant::now();
-    let criterion = Criterion {
-        noise: settings.noise,
-        m: 2 * problem.pairs.len(),
-    };
+    let criterion = Criterion::of(problem, settings.noise)?;
     let lm = candidate_settings(&problem.solver);
     let mut fits = 1;
     let mut current = fit_model(problem, &start_model(problem)?, &lm, &criterion)?;
-    let mut steps = vec![step_record(0, "start".into(), &current, &criterion, vec![])];
+    let mut steps = vec![step_record(0, "start".into(), &current, vec![])];
     let stop_reason = loop {
         let p = current.model.free.len();
-        if criterion.at_floor(current.objective, p) == Some(true) {
+        if criterion.at_floor(current.chi2, p) == Some(true) {
             break "the fit reaches the noise floor (χ² ≤ (m − p) + 2·√(2(m − p)))".to_string();
         }
         if current.model.grown.len() >= settings.max_terms {
@@ -316,7 +400,7 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
                 continue;
             };
             reports.push(CandidateReport {
-                term: c.term.name(),
+                term: c.term.name(&c.seeds[0].medium),
                 seeds: own.len(),
                 best_seed: b,
                 objective: own[b].objective,
@@ -331,7 +415,7 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
         else {
             // Record what was tried, then stop.
             let step = steps.len();
-            let mut last = step_record(step, "none kept".into(), &current, &criterion, reports);
+            let mut last = step_record(step, "none kept".into(), &current, reports);
             last.action = "no candidate lowers the criterion".into();
             steps.push(last);
             break "no candidate term lowers the criterion".to_string();
@@ -339,21 +423,20 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
         current = better;
         steps.push(step_record(
             steps.len(),
-            format!("add {}", term.name()),
+            format!("add {}", term.name(&current.model.medium)),
             &current,
-            &criterion,
             reports,
         ));
         // Prune, one term at a time, until nothing more goes.
         while steps.len() <= MAX_STEPS {
             if let Some(t) = undetermined_term(problem, &current) {
+                let name = t.name(&current.model.medium);
                 current = fit_model(problem, &current.model.without(t), &lm, &criterion)?;
                 fits += 1;
                 steps.push(step_record(
                     steps.len(),
-                    format!("drop {} (undetermined)", t.name()),
+                    format!("drop {name} (undetermined)"),
                     &current,
-                    &criterion,
                     vec![],
                 ));
                 continue;
@@ -374,12 +457,12 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
             fits += refits.len();
             match argmin(refits.iter().map(|f| f.criterion)) {
                 Some(i) if refits[i].criterion < current.criterion => {
+                    let name = older[i].name(&current.model.medium);
                     current = refits[i].clone();
                     steps.push(step_record(
                         steps.len(),
-                        format!("drop {} (criterion)", older[i].name()),
+                        format!("drop {name} (criterion)"),
                         &current,
-                        &criterion,
                         vec![],
                     ));
                 }
@@ -387,10 +470,11 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
             }
         }
     };
-    let at_noise_floor = criterion.at_floor(current.objective, current.model.free.len());
+    let at_noise_floor = criterion.at_floor(current.chi2, current.model.free.len());
     let report = GrowReport {
         criterion: criterion.describe(),
-        noise: criterion.noise,
+        noise: settings.noise,
+        pairs_with_noise: problem.pair_noise.iter().flatten().count(),
         residual_components: criterion.m,
         max_terms: settings.max_terms,
         steps,
@@ -413,7 +497,7 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
 pub fn grown_problem(problem: &Problem, grown: &Grown) -> Problem {
     let model = &grown.fitted.start;
     let mut p = problem.clone();
-    p.medium = Medium::Logistic(model.medium.clone());
+    p.medium = model.medium.clone();
     p.free = model.free.clone();
     p.bounds = model.bounds.clone();
     p.solver.method = crate::problem::SolverMethod::Lm;
@@ -428,17 +512,70 @@ mod tests {
     #[test]
     fn the_criterion_charges_ln_m_per_parameter_and_knows_its_floor() {
         let c = Criterion {
-            noise: Some(0.01),
+            noise: Noise::Uniform(0.01),
             m: 50,
         };
         // χ² = 2F/σ² = 50 at F = 2.5e-3.
-        assert!((c.chi2(2.5e-3).unwrap() - 50.0).abs() < 1e-9);
-        let d = c.value(2.5e-3, 6) - c.value(2.5e-3, 0);
+        let chi2 = c.chi2(2.5e-3, &[]);
+        assert!((chi2.unwrap() - 50.0).abs() < 1e-9);
+        let d = c.value(2.5e-3, chi2, 6) - c.value(2.5e-3, chi2, 0);
         assert!((d - 6.0 * 50f64.ln()).abs() < 1e-9);
         // Floor for p = 0: 50 + 2·√100 = 70.
-        assert_eq!(c.at_floor(0.5 * 70.0e-4, 0), Some(true));
-        assert_eq!(c.at_floor(0.5 * 70.1e-4, 0), Some(false));
-        assert_eq!(Criterion { noise: None, m: 50 }.at_floor(1.0, 0), None);
+        assert_eq!(c.at_floor(c.chi2(0.5 * 70.0e-4, &[]), 0), Some(true));
+        assert_eq!(c.at_floor(c.chi2(0.5 * 70.1e-4, &[]), 0), Some(false));
+        let unknown = Criterion {
+            noise: Noise::Unknown,
+            m: 50,
+        };
+        assert_eq!(unknown.at_floor(unknown.chi2(1.0, &[]), 0), None);
+    }
+
+    /// A problem of three pairs with weights 1, 2, 0 and the given `noise`
+    /// fields.
+    fn three_pairs(noise: [&str; 3]) -> Problem {
+        let pair = |w: f64, n: &str| {
+            format!(
+                r#"{{"origin": [0, 1.6, 0], "through": [0, 1.0, 900], "target": [0, 2.0, 900], "weight": {w}{n}}}"#
+            )
+        };
+        let text = format!(
+            r#"{{"medium": {{"scale": 1.0, "background": {{"n": 1.0, "a": 40.0}}}}, "pairs": [{}, {}, {}]}}"#,
+            pair(1.0, noise[0]),
+            pair(2.0, noise[1]),
+            pair(0.0, noise[2]),
+        );
+        Problem::parse(&text, std::path::Path::new("p.json")).unwrap()
+    }
+
+    #[test]
+    fn per_pair_noise_weighs_each_pairs_residual_by_its_own_sigma() {
+        let p = three_pairs([r#", "noise": 0.01"#, r#", "noise": 0.02"#, ""]);
+        assert_eq!(p.pair_noise, vec![Some(0.01), Some(0.02), None]);
+        // The third pair has no σ of its own and none is given: refused,
+        // naming `solver.noise`.
+        let e = Criterion::of(&p, None).unwrap_err().to_string();
+        assert!(e.contains("solver.noise") && e.contains("pairs[2]"), "{e}");
+        // With a global σ for it: kᵢ = 1/(wᵢσᵢ)², 0 at weight 0.
+        let c = Criterion::of(&p, Some(0.5)).unwrap();
+        assert_eq!(
+            c.noise,
+            Noise::PerPair(vec![1e4, 1.0 / (0.04f64 * 0.04), 0.0])
+        );
+        assert!(c.needs_pairs());
+        // |r₁|² = (1·3 cm)², |r₂|² = (2·2 cm)²: each pair at 3σ and 1σ,
+        // χ² = 9 + 1 (the pair of weight 0 counts nothing).
+        let sq = [0.03f64.powi(2), 0.04f64.powi(2), 0.0];
+        let f = 0.5 * sq.iter().sum::<f64>();
+        let chi2 = c.chi2(f, &sq).unwrap();
+        assert!((chi2 - 10.0).abs() < 1e-9, "{chi2}");
+        // One global σ would have read 2F/σ² = Σ|rᵢ|²/σ² instead.
+        let uniform = Criterion::of(&three_pairs(["", "", ""]), Some(0.01)).unwrap();
+        assert_eq!(uniform.noise, Noise::Uniform(0.01));
+        assert!((uniform.chi2(f, &[]).unwrap() - 25.0).abs() < 1e-9);
+        assert!(uniform.describe().contains("2F/σ²"));
+        assert!(c.describe().contains("σᵢ"));
+        // A failed fit has χ² = ∞.
+        assert_eq!(c.chi2(f64::INFINITY, &[]), Some(f64::INFINITY));
     }
 
     #[test]

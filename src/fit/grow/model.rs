@@ -1,15 +1,22 @@
-//! A model under growth: a logistic medium, its free parameters and their
-//! bounds, and which of its terms growing added (only those may be dropped).
+//! A model under growth: a medium of either growable kind (the logistic
+//! model or real air), its free parameters and their bounds, and which of its
+//! terms growing added (only those may be dropped).
 //!
-//! Adding or dropping a term changes S = Σ|amplitudes|, which divides every
-//! term (`docs/model.md`); `scale` is multiplied by S_new/S_old at the same time,
-//! so the other terms' δ does not change, and `scale` is freed with the first
-//! term added, so the fit can set every term's strength (with one amplitude,
-//! the background's, left fixed there is no gauge freedom).
+//! **The logistic model.** Adding or dropping a term changes
+//! S = Σ|amplitudes|, which divides every term (`docs/model.md`); `scale` is
+//! multiplied by S_new/S_old at the same time, so the other terms' δ does not
+//! change, and `scale` is freed with the first term added, so the fit can set
+//! every term's strength (with one amplitude, the background's, left fixed
+//! there is no gauge freedom).
+//!
+//! **Real air.** Temperatures are absolute (`docs/air.md`): a term adds its
+//! kelvins and nothing else changes, so nothing is rescaled and no extra
+//! parameter is freed.
 
-use crate::medium::{HotField, HotSpot, Inversion, LogisticMedium, Param};
+use crate::medium::air::{AirHotSpot, Exponential, Step};
+use crate::medium::{AirParam, HotField, HotSpot, Inversion, Medium, Param};
 
-/// The parameters a grown hot spot frees (its `edge` stays as seeded).
+/// The parameters a grown logistic hot spot frees (its `edge` stays as seeded).
 pub const HOT_FREE: [HotField; 5] = [
     HotField::X,
     HotField::Z,
@@ -18,32 +25,63 @@ pub const HOT_FREE: [HotField; 5] = [
     HotField::A,
 ];
 
+/// The parameters a grown real-air hot spot frees (its `edge` stays as seeded).
+pub const AIR_HOT_FREE: [HotField; 5] = [
+    HotField::X,
+    HotField::Z,
+    HotField::Radius,
+    HotField::Delta,
+    HotField::ScaleHeight,
+];
+
+/// The parameters of the logistic inversion, in the order they are freed.
+const INVERSION_FREE: [Param; 3] = [Param::InversionN, Param::InversionA, Param::InversionHeight];
+
+/// The parameters of real air's step aloft, in the order they are freed.
+const AIR_INVERSION_FREE: [Param; 3] = [
+    Param::Air(AirParam::InversionDelta),
+    Param::Air(AirParam::InversionHeight),
+    Param::Air(AirParam::InversionThickness),
+];
+
+/// The parameters of real air's surface layer, in the order they are freed.
+const SURFACE_FREE: [Param; 2] = [
+    Param::Air(AirParam::ExponentialDelta),
+    Param::Air(AirParam::ExponentialScaleHeight),
+];
+
 /// A term growing may add or drop.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Term {
-    /// The inversion layer.
+    /// Real air's surface layer, `air.temperature.exponential`.
+    SurfaceLayer,
+    /// The inversion: the logistic `inversion`, or real air's step aloft
+    /// `air.temperature.inversion`.
     Inversion,
     /// Hot spot j of the medium.
     HotSpot(usize),
 }
 
 impl Term {
-    /// Its path name (`inversion`, `hotspots[2]`).
-    pub fn name(self) -> String {
+    /// Its path name in `medium` (`inversion`, `air.temperature.inversion`,
+    /// `air.temperature.exponential`, `hotspots[2]`).
+    pub fn name(self, medium: &Medium) -> String {
+        let air = matches!(medium, Medium::Air(_));
         match self {
+            Term::SurfaceLayer => "air.temperature.exponential".into(),
+            Term::Inversion if air => "air.temperature.inversion".into(),
             Term::Inversion => "inversion".into(),
             Term::HotSpot(j) => format!("hotspots[{j}]"),
         }
     }
 
-    /// Whether `p` is one of its parameters.
+    /// Whether `p` is one of its parameters (of either kind).
     pub fn owns(self, p: Param) -> bool {
         match (self, p) {
-            (Term::Inversion, Param::InversionN | Param::InversionA | Param::InversionHeight) => {
-                true
-            }
+            (Term::SurfaceLayer, p) => SURFACE_FREE.contains(&p),
+            (Term::Inversion, p) => INVERSION_FREE.contains(&p) || AIR_INVERSION_FREE.contains(&p),
             (Term::HotSpot(j), Param::Hot(k, _)) => j == k,
-            _ => false,
+            (Term::HotSpot(_), _) => false,
         }
     }
 }
@@ -51,10 +89,11 @@ impl Term {
 /// A medium with its free parameters: what one candidate fit fits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
-    /// The medium, at the current (start or fitted) values.
-    pub medium: LogisticMedium,
-    /// Free parameters, in order: the problem's, then `scale`, then each
-    /// grown term's.
+    /// The medium, at the current (start or fitted) values: the logistic
+    /// model or real air.
+    pub medium: Medium,
+    /// Free parameters, in order: the problem's, then (logistic) `scale`,
+    /// then each grown term's.
     pub free: Vec<Param>,
     /// `[low, high]` per free parameter.
     pub bounds: Vec<(f64, f64)>,
@@ -81,17 +120,50 @@ impl Model {
         m
     }
 
-    /// The medium's terms by name, in the medium's order.
+    /// The medium's hot spots.
+    pub fn hot_spots(&self) -> usize {
+        match &self.medium {
+            Medium::Logistic(m) => m.hotspots.len(),
+            Medium::Air(m) => m.hotspots.len(),
+            Medium::LinearSquare(_) => 0,
+        }
+    }
+
+    /// Whether the medium has the (logistic or real-air) inversion.
+    pub fn has_inversion(&self) -> bool {
+        match &self.medium {
+            Medium::Logistic(m) => m.inversion.is_some(),
+            Medium::Air(m) => m.air.temperature.inversion.is_some(),
+            Medium::LinearSquare(_) => true,
+        }
+    }
+
+    /// The medium's terms by name, in the medium's order: `background` or
+    /// `air` (the uniform air: base, lapse or table), then the layers, then
+    /// the hot spots.
     pub fn terms(&self) -> Vec<String> {
-        let m = &self.medium;
         let mut t = Vec::new();
-        if m.background.is_some() {
-            t.push("background".to_string());
+        match &self.medium {
+            Medium::Logistic(m) => {
+                if m.background.is_some() {
+                    t.push("background".to_string());
+                }
+                if m.inversion.is_some() {
+                    t.push(Term::Inversion.name(&self.medium));
+                }
+            }
+            Medium::Air(m) => {
+                t.push("air".to_string());
+                if m.air.temperature.exponential.is_some() {
+                    t.push(Term::SurfaceLayer.name(&self.medium));
+                }
+                if m.air.temperature.inversion.is_some() {
+                    t.push(Term::Inversion.name(&self.medium));
+                }
+            }
+            Medium::LinearSquare(_) => t.push("linear_square".to_string()),
         }
-        if m.inversion.is_some() {
-            t.push(Term::Inversion.name());
-        }
-        t.extend((0..m.hotspots.len()).map(|j| Term::HotSpot(j).name()));
+        t.extend((0..self.hot_spots()).map(|j| Term::HotSpot(j).name(&self.medium)));
         t
     }
 
@@ -103,61 +175,126 @@ impl Model {
         }
     }
 
-    /// Rescales `scale` after S changed from `s_old`, so that the terms
-    /// already there keep their δ.
-    fn keep_strengths(&mut self, s_old: f64) {
-        let s_new = self.medium.amplitude_sum();
-        if s_old > 0.0 && s_new > 0.0 {
-            self.medium.scale *= s_new / s_old;
-        }
-    }
-
-    /// The model with `spot` added as a new hot spot, its [`HOT_FREE`]
-    /// parameters freed within `bounds` (in that order).
-    pub fn with_hot_spot(&self, spot: HotSpot, bounds: [(f64, f64); 5]) -> Model {
+    /// The model with `change` made to its medium, then `term`'s
+    /// parameters `params` freed within their bounds. A logistic medium keeps
+    /// the other terms' δ (its `scale` rescaled, and freed).
+    fn with_term(
+        &self,
+        term: Term,
+        change: impl FnOnce(&mut Medium),
+        params: impl IntoIterator<Item = (Param, (f64, f64))>,
+    ) -> Model {
         let mut m = self.clone();
-        let s_old = m.medium.amplitude_sum();
-        m.medium.hotspots.push(spot);
-        m.keep_strengths(s_old);
-        m.free_param(Param::Scale, (0.0, f64::INFINITY));
-        let j = m.medium.hotspots.len() - 1;
-        for (f, b) in HOT_FREE.iter().zip(bounds) {
-            m.free_param(Param::Hot(j, *f), b);
+        let s_old = amplitude_sum(&m.medium);
+        change(&mut m.medium);
+        keep_strengths(&mut m.medium, s_old);
+        if matches!(m.medium, Medium::Logistic(_)) {
+            m.free_param(Param::Scale, (0.0, f64::INFINITY));
         }
-        m.grown.push(Term::HotSpot(j));
-        m
-    }
-
-    /// The model with `layer` added as its inversion, its three parameters
-    /// (n, a, height) freed within `bounds`.
-    pub fn with_inversion(&self, layer: Inversion, bounds: [(f64, f64); 3]) -> Model {
-        let mut m = self.clone();
-        let s_old = m.medium.amplitude_sum();
-        m.medium.inversion = Some(layer);
-        m.keep_strengths(s_old);
-        m.free_param(Param::Scale, (0.0, f64::INFINITY));
-        for (p, b) in [Param::InversionN, Param::InversionA, Param::InversionHeight]
-            .into_iter()
-            .zip(bounds)
-        {
+        for (p, b) in params {
             m.free_param(p, b);
         }
-        m.grown.push(Term::Inversion);
+        m.grown.push(term);
         m
+    }
+
+    /// The logistic model with `spot` added as a new hot spot, its
+    /// [`HOT_FREE`] parameters freed within `bounds` (in that order).
+    pub fn with_hot_spot(&self, spot: HotSpot, bounds: [(f64, f64); 5]) -> Model {
+        let j = self.hot_spots();
+        self.with_term(
+            Term::HotSpot(j),
+            |m| {
+                if let Medium::Logistic(m) = m {
+                    m.hotspots.push(spot);
+                }
+            },
+            HOT_FREE.map(|f| Param::Hot(j, f)).into_iter().zip(bounds),
+        )
+    }
+
+    /// The real-air model with `spot` added as a new hot spot, its
+    /// [`AIR_HOT_FREE`] parameters freed within `bounds` (in that order).
+    pub fn with_air_hot_spot(&self, spot: AirHotSpot, bounds: [(f64, f64); 5]) -> Model {
+        let j = self.hot_spots();
+        self.with_term(
+            Term::HotSpot(j),
+            |m| {
+                if let Medium::Air(m) = m {
+                    m.hotspots.push(spot);
+                }
+            },
+            AIR_HOT_FREE
+                .map(|f| Param::Hot(j, f))
+                .into_iter()
+                .zip(bounds),
+        )
+    }
+
+    /// The logistic model with `layer` added as its inversion, its three
+    /// parameters (n, a, height) freed within `bounds`.
+    pub fn with_inversion(&self, layer: Inversion, bounds: [(f64, f64); 3]) -> Model {
+        self.with_term(
+            Term::Inversion,
+            |m| {
+                if let Medium::Logistic(m) = m {
+                    m.inversion = Some(layer);
+                }
+            },
+            INVERSION_FREE.into_iter().zip(bounds),
+        )
+    }
+
+    /// The real-air model with `step` added as its step aloft
+    /// (`air.temperature.inversion`), its delta, height and thickness freed
+    /// within `bounds`.
+    pub fn with_air_inversion(&self, step: Step, bounds: [(f64, f64); 3]) -> Model {
+        self.with_term(
+            Term::Inversion,
+            |m| {
+                if let Medium::Air(m) = m {
+                    m.air.temperature.inversion = Some(step);
+                }
+            },
+            AIR_INVERSION_FREE.into_iter().zip(bounds),
+        )
+    }
+
+    /// The real-air model with `layer` added as its surface layer
+    /// (`air.temperature.exponential`), its delta and scale height freed
+    /// within `bounds`.
+    pub fn with_surface_layer(&self, layer: Exponential, bounds: [(f64, f64); 2]) -> Model {
+        self.with_term(
+            Term::SurfaceLayer,
+            |m| {
+                if let Medium::Air(m) = m {
+                    m.air.temperature.exponential = Some(layer);
+                }
+            },
+            SURFACE_FREE.into_iter().zip(bounds),
+        )
     }
 
     /// The model without the grown term `term`: its parameters leave `free`,
-    /// later hot spots are renumbered, `scale` keeps the other terms' δ.
+    /// later hot spots are renumbered, and (logistic) `scale` keeps the other
+    /// terms' δ.
     pub fn without(&self, term: Term) -> Model {
         let mut m = self.clone();
-        let s_old = m.medium.amplitude_sum();
-        match term {
-            Term::Inversion => m.medium.inversion = None,
-            Term::HotSpot(j) => {
-                m.medium.hotspots.remove(j);
+        let s_old = amplitude_sum(&m.medium);
+        match (&mut m.medium, term) {
+            (Medium::Logistic(l), Term::Inversion) => l.inversion = None,
+            (Medium::Logistic(l), Term::HotSpot(j)) => {
+                l.hotspots.remove(j);
             }
+            (Medium::Air(a), Term::Inversion) => a.air.temperature.inversion = None,
+            (Medium::Air(a), Term::SurfaceLayer) => a.air.temperature.exponential = None,
+            (Medium::Air(a), Term::HotSpot(j)) => {
+                a.hotspots.remove(j);
+            }
+            // Never grown: nothing to remove.
+            (Medium::Logistic(_), Term::SurfaceLayer) | (Medium::LinearSquare(_), _) => {}
         }
-        m.keep_strengths(s_old);
+        keep_strengths(&mut m.medium, s_old);
         let renumber = |p: Param| match (term, p) {
             (Term::HotSpot(j), Param::Hot(k, f)) if k > j => Param::Hot(k - 1, f),
             _ => p,
@@ -184,23 +321,46 @@ impl Model {
     }
 }
 
+/// S = Σ|amplitudes| of a logistic medium; 0 for real air (which has none).
+fn amplitude_sum(medium: &Medium) -> f64 {
+    match medium {
+        Medium::Logistic(m) => m.amplitude_sum(),
+        _ => 0.0,
+    }
+}
+
+/// Rescales a logistic medium's `scale` after S changed from `s_old`, so that
+/// the terms already there keep their δ; real air needs nothing.
+fn keep_strengths(medium: &mut Medium, s_old: f64) {
+    if let Medium::Logistic(m) = medium {
+        let s_new = m.amplitude_sum();
+        if s_old > 0.0 && s_new > 0.0 {
+            m.scale *= s_new / s_old;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::medium::Background;
+    use crate::medium::{Background, LogisticMedium};
 
     fn base() -> Model {
         Model {
-            medium: LogisticMedium {
+            medium: Medium::Logistic(LogisticMedium {
                 scale: 0.02,
                 background: Some(Background { n: 1.0, a: 150.0 }),
                 inversion: None,
                 hotspots: vec![],
-            },
+            }),
             free: vec![],
             bounds: vec![],
             grown: vec![],
         }
+    }
+
+    fn logistic(m: &Model) -> &LogisticMedium {
+        m.medium.as_logistic().unwrap()
     }
 
     fn spot(x: f64, n: f64) -> HotSpot {
@@ -219,7 +379,7 @@ mod tests {
         let b = [(f64::NEG_INFINITY, f64::INFINITY); 5];
         let m = base().with_hot_spot(spot(0.0, -2.0), b);
         // δ_bg ∝ k_s·n_bg/S: 0.02·1/1 before, 0.06·1/3 after.
-        let bg = |m: &Model| m.medium.scale * 1.0 / m.medium.amplitude_sum();
+        let bg = |m: &Model| logistic(m).scale * 1.0 / logistic(m).amplitude_sum();
         assert!((bg(&m) - 0.02).abs() < 1e-15);
         assert_eq!(m.free[0], Param::Scale);
         assert_eq!(m.free.len(), 6);
@@ -233,15 +393,60 @@ mod tests {
             .with_hot_spot(spot(0.0, -2.0), b)
             .with_hot_spot(spot(50.0, -1.0), b);
         let one = two.without(Term::HotSpot(0));
-        assert_eq!(one.medium.hotspots, vec![spot(50.0, -1.0)]);
+        assert_eq!(logistic(&one).hotspots, vec![spot(50.0, -1.0)]);
         assert_eq!(one.grown, vec![Term::HotSpot(0)]);
         assert!(one.free.contains(&Param::Hot(0, HotField::X)));
         assert!(!one.free.iter().any(|p| matches!(p, Param::Hot(1, _))));
         assert_eq!(one.free.len(), one.bounds.len());
         // The remaining spot's and the background's δ are unchanged.
-        let share = |m: &Model, n: f64| m.medium.scale * n / m.medium.amplitude_sum();
+        let share = |m: &Model, n: f64| logistic(m).scale * n / logistic(m).amplitude_sum();
         assert!((share(&one, -1.0) - share(&two, -1.0)).abs() < 1e-15);
         assert!((share(&one, 1.0) - share(&two, 1.0)).abs() < 1e-15);
         assert_eq!(one.without(Term::HotSpot(0)).free, vec![Param::Scale]);
+    }
+
+    #[test]
+    fn real_air_terms_add_their_kelvins_and_nothing_else() {
+        let air: Medium =
+            serde_json::from_str(r#"{"air": {"temperature": {"base": 20.0}}}"#).unwrap();
+        let start = Model {
+            medium: air,
+            free: vec![],
+            bounds: vec![],
+            grown: vec![],
+        };
+        let b = (0.0, 1.0);
+        let m = start
+            .with_surface_layer(
+                Exponential {
+                    delta: 5.0,
+                    scale_height: 0.3,
+                },
+                [b; 2],
+            )
+            .with_air_inversion(
+                Step {
+                    delta: 1.0,
+                    height: 3.0,
+                    thickness: 0.5,
+                },
+                [b; 3],
+            );
+        // No `scale`: the air's own parameters only.
+        assert_eq!(m.free.len(), 5);
+        assert!(m.free.iter().all(|p| matches!(p, Param::Air(_))));
+        assert_eq!(
+            m.terms(),
+            vec![
+                "air",
+                "air.temperature.exponential",
+                "air.temperature.inversion"
+            ]
+        );
+        assert!(Term::SurfaceLayer.owns(Param::Air(AirParam::ExponentialScaleHeight)));
+        assert!(Term::Inversion.owns(Param::Air(AirParam::InversionThickness)));
+        assert!(!Term::SurfaceLayer.owns(Param::Air(AirParam::InversionDelta)));
+        let back = m.without(Term::SurfaceLayer).without(Term::Inversion);
+        assert_eq!(back, start);
     }
 }

@@ -3,6 +3,10 @@
 
 use serde::Serialize;
 
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 /// One candidate term tried at a step: the best of its seeds.
 #[derive(Clone, Debug, Serialize)]
 pub struct CandidateReport {
@@ -32,7 +36,7 @@ pub struct GrowStep {
     pub free: Vec<String>,
     /// F (m²) of the model after the step.
     pub objective: f64,
-    /// χ² = 2F/σ² when σ is known.
+    /// χ² when σ is known: 2F/σ², or Σ|rᵢ|²/(wᵢσᵢ)² with per-pair σᵢ.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chi2: Option<f64>,
     /// The criterion of the model after the step (lower is better).
@@ -45,12 +49,16 @@ pub struct GrowStep {
 /// The account of a grown model.
 #[derive(Clone, Debug, Serialize)]
 pub struct GrowReport {
-    /// The criterion, in words: `BIC, σ known: χ² + p·ln m` or
-    /// `BIC, σ estimated: m·ln(2F/m) + p·ln m`.
+    /// The criterion, in words: `BIC, σ = … m known: χ² + p·ln m, χ² = 2F/σ²`,
+    /// `BIC, σᵢ per pair known: …` or `BIC, σ estimated: m·ln(2F/m) + p·ln m`.
     pub criterion: String,
-    /// Endpoint noise σ (m) the criterion assumes, if given.
+    /// Endpoint noise σ (m) the criterion assumes, if given (with per-pair
+    /// σᵢ: that of the pairs without their own).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub noise: Option<f64>,
+    /// Pairs that carry their own σᵢ (`pairs[i].noise`); 0: none.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub pairs_with_noise: usize,
     /// Residual components m (two per pair: the endpoint lies on the target
     /// plane, so the third component is zero).
     pub residual_components: usize,
