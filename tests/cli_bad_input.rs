@@ -231,6 +231,15 @@ fn degenerate_pairs() {
         ),
         &["pairs[0].weight"],
     );
+    for noise in ["0", "-0.01", "1e999", "\"1 cm\""] {
+        rejects(
+            &edit(
+                r#""target": [0.0, 2.0, 900.0] }"#,
+                &format!(r#""target": [0.0, 2.0, 900.0], "noise": {noise} }}"#),
+            ),
+            &["pairs[0].noise"],
+        );
+    }
 }
 
 #[test]
@@ -753,14 +762,32 @@ fn bad_growth_settings_are_named() {
         ),
         &["solver.grow", "nelder-mead"],
     );
+    // Real air grows; a logistic medium with no term does not.
     rejects(
-        &air(r#"{"air": {"temperature": {"base": 20.0}}}"#).replacen(
+        &no_term().replacen(
             r#""max_iterations": 50"#,
             r#""max_iterations": 50, "grow": true"#,
             1,
         ),
-        &["solver.grow", "logistic"],
+        &["solver.grow", "at least one term"],
     );
+}
+
+/// The good problem with a logistic medium of no term (nothing to grow from).
+fn no_term() -> String {
+    GOOD.replacen(
+        r#""scale": 1.0,
+    "background": { "n": 1.0, "a": 40.0 },
+    "inversion": { "n": 0.3, "a": 2.0, "height": 25.0 }"#,
+        r#""scale": 1.0"#,
+        1,
+    )
+    .replacen(
+        r#""free": ["background.a"],
+  "bounds": { "background.a": [1.0, 100.0] },"#,
+        "",
+        1,
+    )
 }
 
 #[test]
@@ -768,12 +795,8 @@ fn bad_growth_flags_exit_2_naming_them() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("problem.json");
     std::fs::write(&input, GOOD).unwrap();
-    let air_input = dir.path().join("air.json");
-    std::fs::write(
-        &air_input,
-        air(r#"{"air": {"temperature": {"base": 20.0}}}"#),
-    )
-    .unwrap();
+    let bare_input = dir.path().join("bare.json");
+    std::fs::write(&bare_input, no_term()).unwrap();
     let output = dir.path().join("out.json");
     let cases: [(&Path, &[&str], &str); 8] = [
         (&input, &["--grow", "--noise", "0"], "--noise"),
@@ -783,7 +806,7 @@ fn bad_growth_flags_exit_2_naming_them() {
         (&input, &["--noise", "0.01"], "--noise"),
         (&input, &["--max-terms", "2"], "--max-terms"),
         (&input, &["--grow", "--method", "nelder-mead"], "--method"),
-        (&air_input, &["--grow"], "--grow"),
+        (&bare_input, &["--grow"], "--grow"),
     ];
     for (file, args, flag) in cases {
         let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
