@@ -447,7 +447,17 @@ fn real_air_fields_out_of_range_are_named() {
         (
             t(base, r#", "refractivity": {"gladstone_dale": -0.08}"#),
             "medium.air.refractivity.gladstone_dale",
-            "≥ 0",
+            "[0, 1] K",
+        ),
+        (
+            t(base, r#", "refractivity": {"gladstone_dale": 99475020}"#),
+            "medium.air.refractivity.gladstone_dale",
+            "[0, 1] K",
+        ),
+        (
+            t(base, r#", "pressure": 1e9"#),
+            "medium.air.pressure",
+            "at most 10000000 Pa",
         ),
         (
             t(r#"{"exponential": {"delta": 3, "scale_height": 0}}"#, ""),

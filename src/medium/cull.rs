@@ -21,9 +21,10 @@
 //! its cell, so its mean length is the density of hot spots times the area
 //! of a reach disc grown by about a cell; half the reach measured no faster
 //! in the lanes kernel, which refills a lane's list on every cell it
-//! enters), raised so that there are at most 16 cells per hot spot and at most [`MAX_ENTRIES`] entries in all (large,
-//! overlapping hot spots). A grid is only built when it pays: with at least
-//! two hot spots, finite parameters and lists whose mean length is at most
+//! enters), raised so that there are at most 16 cells per hot spot and at
+//! most 2²² entries in all (`MAX_ENTRIES`; large, overlapping hot spots). A
+//! grid is only built when it pays: with at least two hot spots, finite
+//! parameters and lists whose mean length is at most
 //! half the hot spots; else [`HotSpotGrid::new`] gives `None` and every hot
 //! spot is evaluated everywhere.
 //!
