@@ -168,3 +168,25 @@ fn fuzz_structured_subnormal_amplitudes_keep_their_ratios() {
     assert!((d0 - d1).abs() <= 1e-15 * d1.abs(), "{d0} vs {d1}");
     assert!((g0 - g1).norm() <= 1e-12 * g1.norm(), "{g0:?} vs {g1:?}");
 }
+
+/// `air` (10 minutes in): an inversion 2 m thick at 1.26·10⁸³ m. The
+/// hydrostatic table's node spacing near it fell below the spacing of floats
+/// there, so its nodes never advanced and the table grew until the fuzzer's
+/// 2 GB limit. Now the table stops at the last distinct node.
+#[test]
+fn fuzz_air_inversion_at_1e83_m_builds_a_finite_table() {
+    let text = r#"{"air": {"temperature": {"base": 10.0, "exponential": {"delta": -3.0, "scale_height": 4.0},
+        "inversion": {"delta": 10.0, "height": 1.25555e83, "thickness": 2.0}},
+        "pressure": 101325.0, "humidity": 0.6, "wavelength": 550.0}}"#;
+    let path = Path::new("medium.json");
+    let m: Medium = parse_json(text, path, "medium").unwrap();
+    if let Err(e) = m.validate() {
+        named(&e.in_file(path));
+        return;
+    }
+    let field = m.field();
+    for h in [0.0, 1.0, 100.0, 1e4] {
+        let (d, g) = field.delta_gradient(V3::new(0.0, h, 0.0));
+        assert!(d.is_finite() && g.is_finite(), "{h} m: δ {d}, ∇δ {g:?}");
+    }
+}
