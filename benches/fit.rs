@@ -1,14 +1,17 @@
 //! Fit time of every bundled problem, and of a 15-pair, 4-parameter hot-spot fit
 //! (the target: under 0.2 s on one core). Run with `cargo bench --bench fit`;
-//! pin to one core with `RAYON_NUM_THREADS=1`.
+//! pin to one core with `RAYON_NUM_THREADS=1`. With `MIRAGE_BENCH_TABLE_ONLY=1`
+//! it prints the README's table instead (median of 7 fits each, as
+//! `benches/tables.sh` runs it).
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::Criterion;
 use mirage::fit::fit;
 use mirage::fit::synthetic::retarget;
 use mirage::pair::PointPair;
 use mirage::problem::Problem;
+use mirage::trace::Method;
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 fn problems_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("problems")
@@ -45,20 +48,23 @@ fn fifteen_pair_problem() -> Problem {
     p
 }
 
+/// Every bundled problem (`problems/*.json`; `problems/scenes/` holds scenes).
+fn bundled() -> Vec<Problem> {
+    let mut files: Vec<_> = std::fs::read_dir(problems_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    files.iter().map(|f| Problem::load(f).unwrap()).collect()
+}
+
 fn bench_fits(c: &mut Criterion) {
     let mut group = c.benchmark_group("fit");
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(5));
-    let mut files: Vec<_> = std::fs::read_dir(problems_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        // Problem files only: `problems/scenes/` holds scenes.
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    files.sort();
-    for f in files {
-        let p = Problem::load(&f).unwrap();
+    for p in bundled() {
         group.bench_function(p.name.clone(), |b| b.iter(|| fit(&p, None).unwrap()));
     }
     let p = fifteen_pair_problem();
@@ -72,5 +78,52 @@ fn bench_fits(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_fits);
-criterion_main!(benches);
+/// The README's table: per problem, the median wall time of 7 fits (after
+/// one unmeasured), its fitted F and the fit's size.
+fn table() {
+    println!(
+        "Fit time, in process (`mirage::fit::fit`, the solver and identifiability analysis), median of 7, rayon threads: {}\n",
+        rayon::current_num_threads()
+    );
+    println!("| problem | pairs | free | trace | fitted F (m²) | fit time |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    let mut all = bundled();
+    all.push(fifteen_pair_problem());
+    for p in all {
+        let r = fit(&p, None).unwrap();
+        let mut times: Vec<f64> = (0..7)
+            .map(|_| {
+                let t = Instant::now();
+                std::hint::black_box(fit(&p, None).unwrap());
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        let name = if p.pairs.len() == 15 && p.name == "desert-lake" {
+            "desert-lake, 15 pairs".to_string()
+        } else {
+            p.name.clone()
+        };
+        println!(
+            "| {name} | {} | {} | {} | {:.1e} | {:.1} ms |",
+            p.pairs.len(),
+            p.free.len(),
+            match p.trace.method {
+                Method::Rk4 { step } => format!("RK4 {step} m"),
+                Method::Dopri5 { tolerance } => format!("dopri5 {tolerance:e}"),
+            },
+            r.totals.objective,
+            times[3] * 1e3
+        );
+    }
+}
+
+fn main() {
+    if std::env::var_os("MIRAGE_BENCH_TABLE_ONLY").is_some() {
+        table();
+        return;
+    }
+    let mut c = Criterion::default().configure_from_args();
+    bench_fits(&mut c);
+    c.final_summary();
+}

@@ -5,15 +5,17 @@
 //! what path reuse buys on the sea at 640×360.
 //!
 //! Run with `cargo bench --bench render`; the targets are for 2 cores:
-//! `RAYON_NUM_THREADS=2 cargo bench --bench render`.
+//! `RAYON_NUM_THREADS=2 cargo bench --bench render`. With
+//! `MIRAGE_BENCH_TABLE_ONLY=1` it prints the README's table instead: every
+//! bundled flat-ground scene at 1280×720, median of 3 (`benches/tables.sh`).
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::Criterion;
 use mirage::render::march::TracerKind;
 use mirage::render::{RenderOptions, Renderer, summary};
 use mirage::scene::Scene;
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 fn scene(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -88,5 +90,44 @@ fn path_reuse(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, full_hd_720, tracers, path_reuse);
-criterion_main!(benches);
+/// The README's table: 1280×720 renders (setup included), median of 3 after
+/// one unmeasured, on the rayon pool's threads.
+fn table() {
+    println!(
+        "1280×720 renders (setup, path table and image; not the PNG), median of 3, rayon threads: {}\n",
+        rayon::current_num_threads()
+    );
+    println!("| scene | air | render time |");
+    println!("| --- | --- | --- |");
+    for (name, air) in [
+        ("sea", "stratified (path table)"),
+        ("road", "one hot spot"),
+        ("desert", "one large hot spot"),
+        ("desert-patches", "400 hot patches (culled)"),
+    ] {
+        let s = scene(name);
+        let opts = options(1280, TracerKind::Quadric, true);
+        black_box(Renderer::new(&s, &opts).render());
+        let mut times: Vec<f64> = (0..3)
+            .map(|_| {
+                let t = Instant::now();
+                black_box(Renderer::new(&s, &opts).render());
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        println!("| {name} | {air} | {:.2} s |", times[1]);
+    }
+}
+
+fn main() {
+    if std::env::var_os("MIRAGE_BENCH_TABLE_ONLY").is_some() {
+        table();
+        return;
+    }
+    let mut c = Criterion::default().configure_from_args();
+    full_hd_720(&mut c);
+    tracers(&mut c);
+    path_reuse(&mut c);
+    c.final_summary();
+}

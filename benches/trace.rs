@@ -18,7 +18,8 @@
 //!
 //! Run with `cargo bench --bench trace`; a filter such as
 //! `cargo bench --bench trace -- "hot spot/"` runs a subset (the table is
-//! printed unless `MIRAGE_BENCH_NO_TABLE` is set).
+//! printed unless `MIRAGE_BENCH_NO_TABLE` is set; `MIRAGE_BENCH_TABLE_ONLY=1`
+//! prints the table alone, as `benches/tables.sh` does).
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput};
 use mirage::fit::objective::Objective;
@@ -463,14 +464,11 @@ fn best_of(mut f: impl FnMut(), clock: impl Fn() -> f64) -> f64 {
 fn table() {
     let jobs = jobs();
     println!(
-        "\nOne core (best CPU time of this thread), {} rays of 1–1.5 km, RK4 step {STEP} m; CPU: {}",
-        jobs.len(),
+        "\nRK4 through the logistic model: one core (best CPU time of this thread), rays of 1–1.5 km, step {STEP} m; CPU: {}\n",
         cpu_features()
     );
-    println!(
-        "{:<15} {:<24} {:>5} {:>12} {:>14}",
-        "medium", "path", "rays", "rays/s", "M steps/s"
-    );
+    println!("| medium | path | rays | rays/s | M steps/s |");
+    println!("| --- | --- | --- | --- | --- |");
     for (name, medium) in media() {
         let field = medium.field();
         let mut out = vec![placeholder(); jobs.len()];
@@ -483,7 +481,7 @@ fn table() {
             let out = &mut out[..jobs.len()];
             let t = best_time(|| run(&field, jobs, out));
             println!(
-                "{name:<15} {path:<24} {:>5} {:>12.0} {:>14.2}",
+                "| {name} | {path} | {} | {:.0} | {:.2} |",
                 jobs.len(),
                 jobs.len() as f64 / t,
                 steps / t / 1e6
@@ -491,19 +489,17 @@ fn table() {
         }
     }
     println!(
-        "\nDormand–Prince, one core (best CPU time of this thread): rays/s and M right-hand sides/s"
+        "\nDormand–Prince, one core (best CPU time of this thread): rays/s and million right-hand sides/s\n"
     );
-    println!(
-        "{:<32} {:>6} {:<14} {:>12} {:>10} {:>10}",
-        "case", "rays", "path", "rays/s", "M RHS/s", "RHS/ray"
-    );
+    println!("| case | rays | path | rays/s | M RHS/s | RHS/ray |");
+    println!("| --- | --- | --- | --- | --- | --- |");
     for (name, field, jobs, tolerance) in adaptive_cases() {
         let mut out = vec![placeholder(); jobs.len()];
         for (path, run) in adaptive_paths(tolerance) {
             let t = best_time(|| run(&field, &jobs, &mut out));
             let rhs: u64 = out.iter().map(|t| t.stats.rhs_evaluations).sum();
             println!(
-                "{name:<32} {:>6} {path:<14} {:>12.0} {:>10.2} {:>10.1}",
+                "| {name} | {} | {path} | {:.0} | {:.2} | {:.1} |",
                 jobs.len(),
                 jobs.len() as f64 / t,
                 rhs as f64 / t / 1e6,
@@ -515,6 +511,9 @@ fn table() {
         .num_threads(1)
         .build()
         .unwrap();
+    println!(
+        "\nOne exact Jacobian against one residual evaluation, one thread (best wall time):\n"
+    );
     for (label, objective) in objectives() {
         let x: Vec<f64> = objective.start().iter().copied().collect();
         let r = best_wall_time(|| {
@@ -524,7 +523,7 @@ fn table() {
             pool.install(|| black_box(objective.jacobian(&x)));
         });
         println!(
-            "{label}: residuals {:.2} ms, Jacobian ({} parameters) {:.2} ms = {:.1} × residuals",
+            "- {label}: residuals {:.2} ms, Jacobian ({} parameters) {:.2} ms = {:.1} × residuals",
             r * 1e3,
             objective.free().len(),
             j * 1e3,
@@ -553,7 +552,7 @@ fn table() {
         pool.install(|| black_box(objective.residuals(&x)));
     });
     println!(
-        "desert-lake (rk4 1 m) residuals, {} pairs: objective {:.3} ms, one lanes batch {:.3} ms ({:.1}×)",
+        "- desert-lake (rk4 1 m) residuals, {} pairs: objective {:.3} ms, one lanes batch {:.3} ms ({:.1}×)",
         pairs.len(),
         scalar * 1e3,
         lanes * 1e3,
@@ -567,6 +566,11 @@ fn cpu_features() -> String {
 }
 
 fn main() {
+    // `benches/tables.sh` wants the table alone (a minute, not criterion's ten).
+    if std::env::var_os("MIRAGE_BENCH_TABLE_ONLY").is_some() {
+        table();
+        return;
+    }
     let mut c = Criterion::default().configure_from_args();
     bench_trace(&mut c);
     bench_adaptive(&mut c);

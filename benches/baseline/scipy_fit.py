@@ -128,17 +128,45 @@ class Medium:
 # --------------------------------------------------------------------------------------
 
 
-class Pair:
-    """A point pair: launch direction, target plane (normal = horizontal target − origin)."""
+class RoundEarth:
+    """A medium over the sphere of radius R touching y = 0 at the origin (docs/air.md,
+    "How mirage implements the round earth"): δ is evaluated at (x, h, z), h the height
+    above the sphere, and ∇δ = (∂δ/∂x, 0, ∂δ/∂z) + ∂δ/∂h · ∇h."""
 
-    def __init__(self, d: dict):
+    def __init__(self, medium, radius):
+        self.medium, self.R = medium, float(radius)
+        self.centre = np.array([0.0, -self.R, 0.0])
+
+    def height(self, p):
+        x, y, z = p
+        return (x * x + z * z + y * (2.0 * self.R + y)) / (np.linalg.norm(p - self.centre) + self.R)
+
+    def up(self, p):
+        d = p - self.centre
+        return d / np.linalg.norm(d)
+
+    def delta_grad(self, p):
+        p = np.asarray(p, float)
+        d, g = self.medium.delta_grad(np.array([p[0], self.height(p), p[2]]))
+        return d, np.array([g[0], 0.0, g[2]]) + g[1] * self.up(p)
+
+
+class Pair:
+    """A point pair: launch direction, target plane (normal = horizontal target − origin,
+    horizontal at the target: perpendicular to its local vertical over the round earth)."""
+
+    def __init__(self, d: dict, earth=None):
         self.origin = np.asarray(d["origin"], float)
         self.target = np.asarray(d["target"], float)
         through = np.asarray(d["through"], float)
         self.weight = float(d.get("weight", 1.0))
         self.direction = (through - self.origin) / np.linalg.norm(through - self.origin)
         m = self.target - self.origin
-        m[1] = 0.0
+        if earth is None:
+            m[1] = 0.0
+        else:
+            up = earth.up(self.target)
+            m = m - (m @ up) * up
         if np.linalg.norm(m) == 0.0:
             raise ValueError("target straight above or below origin")
         self.normal = m / np.linalg.norm(m)
@@ -235,7 +263,10 @@ class Objective:
     def __init__(self, problem, rtol, atol, method, deadline=None):
         self.base = problem["medium"]
         self.free = list(problem.get("free") or [])
-        self.pairs = [Pair(p) for p in problem["pairs"]]
+        radius = (problem.get("earth") or {}).get("radius")
+        # Pairs need only the geometry (the up vector) of the sphere.
+        self.earth = RoundEarth(None, radius) if radius else None
+        self.pairs = [Pair(p, self.earth) for p in problem["pairs"]]
         self.rtol, self.atol, self.method = rtol, atol, method
         self.deadline = deadline
         self.nres = self.nrays = self.nrhs = 0
@@ -251,6 +282,8 @@ class Objective:
         if count and self.deadline is not None and time.perf_counter() > self.deadline:
             raise TimeUp
         medium = Medium(self.medium_dict(theta))
+        if self.earth is not None:
+            medium = RoundEarth(medium, self.earth.R)
         r = np.empty(3 * len(self.pairs))
         for i, p in enumerate(self.pairs):
             e, _, nfev = trace(medium, p, rtol or self.rtol, atol or self.atol,
