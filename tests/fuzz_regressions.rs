@@ -9,7 +9,7 @@ use mirage::io::json::parse_json;
 use mirage::math::V3;
 use mirage::medium::{IndexField, Medium};
 use mirage::problem::Problem;
-use mirage::trace::{Earth, Method, TargetPlane, TraceOptions, trace};
+use mirage::trace::{Earth, EarthSpec, Method, TargetPlane, TraceOptions, trace};
 use std::path::Path;
 
 /// The input error of `e`: exit 2, a field path, a message; and its text has
@@ -189,4 +189,41 @@ fn fuzz_air_inversion_at_1e83_m_builds_a_finite_table() {
         let (d, g) = field.delta_gradient(V3::new(0.0, h, 0.0));
         assert!(d.is_finite() && g.is_finite(), "{h} m: δ {d}, ∇δ {g:?}");
     }
+}
+
+/// `structured` (4 minutes in): a round earth of radius 6·10³⁰³ m. A height
+/// takes y·(2R + y), which overflowed, and a ray 100 km up got a NaN
+/// direction. Radii above 10¹⁵ m are refused by name; at that radius the
+/// same ray is finite.
+#[test]
+fn fuzz_structured_earth_radius_6e303_is_refused() {
+    let e = EarthSpec {
+        radius: 6.001795188716654e303,
+    }
+    .validate()
+    .unwrap_err();
+    assert_eq!(e.path, "radius");
+    assert!(e.message.contains("at most 1e15"), "{e}");
+    let text = r#"{"scale": 0.02, "background": {"n": 1.0, "a": 150.0}}"#;
+    let m: Medium = parse_json(text, Path::new("m.json"), "medium").unwrap();
+    let field = m.field();
+    let spec = EarthSpec { radius: 1.0e15 };
+    spec.validate().unwrap();
+    let o = V3::new(1e-6, 1e5, 0.0);
+    let d = V3::new(0.4723077727790377, -0.1716754988696719, 0.8645535789413831);
+    let mut opts = TraceOptions::new(Method::Dopri5 { tolerance: 1e-3 });
+    opts.max_steps = 20_000;
+    opts.max_length = Some(4e5);
+    opts.earth = Earth::Round {
+        radius: spec.radius,
+    };
+    let plane = TargetPlane {
+        point: o + V3::new(0.0, 0.0, 1e5),
+        normal: V3::new(0.0, 0.0, 1.0),
+    };
+    let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
+    assert!(
+        t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
+        "{t:?}"
+    );
 }

@@ -25,6 +25,11 @@ use serde::{Deserialize, Serialize};
 /// hundred metres wide would already wrap around the sphere.
 pub const MIN_RADIUS: f64 = 1000.0;
 
+/// The largest radius of a round earth (m): 10¹⁵ m, 10⁸ earths, beyond which
+/// the ground is flat to any precision a scene has. Heights take y·(2R + y),
+/// which overflowed to ∞ for a radius of 6·10³⁰³ m (found by fuzzing).
+pub const MAX_RADIUS: f64 = 1.0e15;
+
 /// The mean radius of the earth (m), the default of `mirage refraction`.
 pub const EARTH_RADIUS: f64 = 6_371_000.0;
 
@@ -32,12 +37,12 @@ pub const EARTH_RADIUS: f64 = 6_371_000.0;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EarthSpec {
-    /// The sphere's radius (m), at least [`MIN_RADIUS`].
+    /// The sphere's radius (m), from [`MIN_RADIUS`] to [`MAX_RADIUS`].
     pub radius: f64,
 }
 
 impl EarthSpec {
-    /// Checks the radius: a finite number of at least [`MIN_RADIUS`] metres.
+    /// Checks the radius: a finite number of [`MIN_RADIUS`] to [`MAX_RADIUS`] metres.
     pub fn validate(&self) -> Result<(), FieldError> {
         let r = self.radius;
         if !r.is_finite() || r <= 0.0 {
@@ -51,6 +56,14 @@ impl EarthSpec {
                 "radius",
                 format!(
                     "must be at least {MIN_RADIUS} m (the earth's is 6371000), got {r}: below a kilometre the ground wraps around within the scene"
+                ),
+            ));
+        }
+        if r > MAX_RADIUS {
+            return Err(FieldError::new(
+                "radius",
+                format!(
+                    "must be at most {MAX_RADIUS:e} m (the earth's is 6371000), got {r}: for a flatter ground leave out `earth`"
                 ),
             ));
         }
