@@ -1,7 +1,7 @@
 //! Point pairs: "an observer at `origin` who looks toward `through` must see
 //! `target`", and the residual that measures how far the air is from that.
 
-use crate::error::FieldError;
+use crate::error::{FieldError, ValueError};
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
 use crate::medium::air::WAVELENGTH_RANGE;
@@ -36,10 +36,24 @@ fn is_one(w: &f64) -> bool {
     *w == 1.0
 }
 
+/// Checks an endpoint noise σ (`pairs[i].noise`, `solver.noise`, `--noise`):
+/// a finite number > 0 metres.
+pub fn check_noise(v: f64) -> std::result::Result<f64, ValueError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(ValueError::OutOfRange {
+            rule: format!("must be a finite number > 0 (metres), got {v}"),
+        })
+    }
+}
+
 /// One pair as a problem file holds it: the [`PointPair`] and, optionally,
 /// the noise σ of its endpoint, which only a grown model's criterion reads
 /// (`crate::fit::grow`). [`PointPair`] itself has no noise: it is what is
-/// traced.
+/// traced. Its fields repeat [`PointPair`]'s rather than `#[serde(flatten)]`
+/// it, because serde's `flatten` cannot be combined with
+/// `deny_unknown_fields`, which names a misspelt field.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PairEntry {
@@ -73,14 +87,11 @@ impl PairEntry {
         }
     }
 
-    /// [`PointPair::validate`], and the noise (if any) finite and > 0.
+    /// [`PointPair::validate`], and the noise (if any) as [`check_noise`] says.
     pub fn validate(&self) -> Result<(), FieldError> {
         self.pair().validate()?;
-        match self.noise {
-            Some(s) if !(s.is_finite() && s > 0.0) => Err(FieldError::new(
-                "noise",
-                format!("must be a finite number > 0 (metres), got {s}"),
-            )),
+        match self.noise.map(check_noise) {
+            Some(Err(e)) => Err(FieldError::new("noise", e.to_string())),
             _ => Ok(()),
         }
     }

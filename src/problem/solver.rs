@@ -150,16 +150,9 @@ pub struct GrowSettings {
 /// Default of `solver.max_terms` / `--max-terms`.
 pub const DEFAULT_MAX_TERMS: usize = 4;
 
-/// Checks a noise σ (`solver.noise`, `--noise`): finite and > 0 metres.
-pub fn check_noise(v: f64) -> std::result::Result<f64, ValueError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(ValueError::OutOfRange {
-            rule: format!("must be a finite number > 0 (metres), got {v}"),
-        })
-    }
-}
+/// Checks a noise σ (`solver.noise`, `--noise`, `pairs[i].noise`): finite
+/// and > 0 metres. It lives beside the pairs, which use it too.
+pub use crate::pair::check_noise;
 
 /// Checks a term limit (`solver.max_terms`, `--max-terms`): at least 1.
 pub fn check_max_terms(v: usize) -> std::result::Result<usize, ValueError> {
