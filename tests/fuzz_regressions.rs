@@ -7,7 +7,7 @@
 use mirage::error::{Error, WHOLE_DOCUMENT};
 use mirage::io::json::parse_json;
 use mirage::math::V3;
-use mirage::medium::{IndexField, Medium};
+use mirage::medium::{Field, IndexField, Medium};
 use mirage::problem::Problem;
 use mirage::trace::{Earth, EarthSpec, Method, TargetPlane, TraceOptions, trace};
 use std::path::Path;
@@ -23,6 +23,25 @@ fn named(e: &Error) -> (String, String) {
     let text = e.to_string();
     assert!(!text.contains(": -:") && !text.contains(": :"), "{text}");
     (field.path.clone(), text)
+}
+
+/// One ray from `o` along `d` toward a plane `distance` ahead in z, capped at
+/// 20,000 steps and 4 × `distance` as the fuzz targets trace it
+/// (`fuzz/fuzz_targets/common.rs`): its endpoint, direction and length finite.
+fn assert_finite_ray(field: &Field, o: V3, d: V3, method: Method, earth: Earth, distance: f64) {
+    let mut opts = TraceOptions::new(method);
+    opts.max_steps = 20_000;
+    opts.max_length = Some(4.0 * distance);
+    opts.earth = earth;
+    let plane = TargetPlane {
+        point: o + V3::new(0.0, 0.0, distance),
+        normal: V3::new(0.0, 0.0, 1.0),
+    };
+    let t = trace::<f64, _>(field, o, d, Some(&plane), &opts, None);
+    assert!(
+        t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
+        "from {o:?} along {d:?} by {method:?} over {earth:?}: {t:?}"
+    );
 }
 
 /// `problem`: a key `""` whose colon never came (`{"": "…` cut short) had
@@ -94,18 +113,7 @@ fn fuzz_air_huge_gladstone_dale_constant_is_refused() {
         let e = elevation.to_radians();
         let d = V3::new(0.0, e.sin(), e.cos());
         let o = V3::new(0.0, 1.5, 0.0);
-        let mut opts = TraceOptions::new(Method::Rk4 { step: 5.0 });
-        opts.max_steps = 20_000;
-        opts.max_length = Some(1200.0);
-        let plane = TargetPlane {
-            point: o + V3::new(0.0, 0.0, 300.0),
-            normal: V3::new(0.0, 0.0, 1.0),
-        };
-        let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
-        assert!(
-            t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
-            "{elevation}°: {t:?}"
-        );
+        assert_finite_ray(&field, o, d, Method::Rk4 { step: 5.0 }, Earth::Flat, 300.0);
     }
 }
 
@@ -133,19 +141,7 @@ fn fuzz_structured_subnormal_scale_ray_stays_finite() {
         delta.is_finite() && grad.is_finite(),
         "δ {delta}, ∇δ {grad:?}"
     );
-    let mut opts = TraceOptions::new(Method::Rk4 { step: 0.01 });
-    opts.max_steps = 20_000;
-    opts.max_length = Some(4.0);
-    opts.earth = Earth::Flat;
-    let plane = TargetPlane {
-        point: o + V3::new(0.0, 0.0, 1.0),
-        normal: V3::new(0.0, 0.0, 1.0),
-    };
-    let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
-    assert!(
-        t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
-        "{t:?}"
-    );
+    assert_finite_ray(&field, o, d, Method::Rk4 { step: 0.01 }, Earth::Flat, 1.0);
 }
 
 /// The same hunt, one step on: amplitudes that are all subnormal had no
@@ -211,19 +207,8 @@ fn fuzz_structured_earth_radius_6e303_is_refused() {
     spec.validate().unwrap();
     let o = V3::new(1e-6, 1e5, 0.0);
     let d = V3::new(0.4723077727790377, -0.1716754988696719, 0.8645535789413831);
-    let mut opts = TraceOptions::new(Method::Dopri5 { tolerance: 1e-3 });
-    opts.max_steps = 20_000;
-    opts.max_length = Some(4e5);
-    opts.earth = Earth::Round {
+    let earth = Earth::Round {
         radius: spec.radius,
     };
-    let plane = TargetPlane {
-        point: o + V3::new(0.0, 0.0, 1e5),
-        normal: V3::new(0.0, 0.0, 1.0),
-    };
-    let t = trace::<f64, _>(&field, o, d, Some(&plane), &opts, None);
-    assert!(
-        t.endpoint.is_finite() && t.direction.is_finite() && t.arc_length.is_finite(),
-        "{t:?}"
-    );
+    assert_finite_ray(&field, o, d, Method::Dopri5 { tolerance: 1e-3 }, earth, 1e5);
 }
