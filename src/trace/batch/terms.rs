@@ -14,6 +14,18 @@
 //! loaded per lane instead of broadcast); a lane with a shorter list is
 //! padded with a hot spot of zero amplitude, which adds exactly 0. A step
 //! thus costs the longest list among the lanes, not the number of hot spots.
+//!
+//! Where the lanes sit in different cells (a fan of rays over a desert of
+//! patches), the longest list is several times the mean one, and most of
+//! those slots are padding. The cache then also *packs* the lists: the
+//! (lane, hot spot) pairs, k-th entries of all lanes before the (k+1)-th,
+//! fill chunks of N items; each chunk's terms are computed in one SIMD loop
+//! (the positions gathered by lane) and added to their lanes one item at a
+//! time, in chunk order. Each lane thus still adds its hot spots in its
+//! list's order, the terms are the same numbers, and a step costs
+//! ⌈Σ lists / N⌉ chunks instead of the longest list. The cache takes the
+//! packed form whenever it has fewer chunks than the longest list has
+//! entries (decided when a lane changes cell).
 
 // Lane loops index several arrays in lockstep; `for i in 0..N` over fixed-size
 // arrays is the form the compiler vectorizes.
@@ -51,6 +63,22 @@ pub(crate) struct HotCache<const N: usize> {
     longest: usize,
     /// `slots[k][f][i]`: coefficient f of lane i's k-th hot spot.
     slots: Vec<[[f64; N]; 6]>,
+    /// The packed lists (see the module documentation), in use when
+    /// `packed` is true.
+    packed: bool,
+    /// Chunks of N (lane, hot spot) items; the last one may be partly full.
+    chunks: Vec<Chunk<N>>,
+}
+
+/// N packed items: each its lane and its hot spot's coefficients.
+#[derive(Clone, Copy)]
+struct Chunk<const N: usize> {
+    /// `coef[f][j]`: coefficient f of item j's hot spot.
+    coef: [[f64; N]; 6],
+    /// Item j's lane (padding items: lane 0 and [`NULL_SPOT`], never added).
+    lane: [usize; N],
+    /// Items in use.
+    len: usize,
 }
 
 impl<const N: usize> HotCache<N> {
@@ -62,6 +90,8 @@ impl<const N: usize> HotCache<N> {
             count: [0; N],
             longest: 0,
             slots: vec![lane_major; grid.map_or(0, HotSpotGrid::longest)],
+            packed: false,
+            chunks: Vec::new(),
         }
     }
 
@@ -78,6 +108,44 @@ impl<const N: usize> HotCache<N> {
         }
         if changed {
             self.longest = self.count.iter().copied().max().unwrap_or(0);
+            let total: usize = self.count.iter().sum();
+            self.packed = total.div_ceil(N) < self.longest;
+            if self.packed {
+                self.pack();
+            }
+        }
+    }
+
+    /// Fills `chunks` from the lanes' slots: the k-th entries of all lanes,
+    /// lane by lane, before the (k+1)-th (rare: on a change of cell).
+    #[inline(never)]
+    fn pack(&mut self) {
+        let empty = Chunk {
+            coef: std::array::from_fn(|f| [NULL_SPOT[f]; N]),
+            lane: [0; N],
+            len: 0,
+        };
+        self.chunks.clear();
+        let mut chunk = empty;
+        for (k, slot) in self.slots[..self.longest].iter().enumerate() {
+            for i in 0..N {
+                if k >= self.count[i] {
+                    continue;
+                }
+                let j = chunk.len;
+                for f in 0..6 {
+                    chunk.coef[f][j] = slot[f][i];
+                }
+                chunk.lane[j] = i;
+                chunk.len += 1;
+                if chunk.len == N {
+                    self.chunks.push(chunk);
+                    chunk = empty;
+                }
+            }
+        }
+        if chunk.len > 0 {
+            self.chunks.push(chunk);
         }
     }
 
@@ -223,6 +291,9 @@ fn culled<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
     if BG || INV {
         layer_loop::<N, FMA, BG, INV>(bg, inv, y, d, gy);
     }
+    if cache.packed {
+        return packed::<N, FMA>(cache, [x, y, z], d, [gx, gy, gz]);
+    }
     let lane = |slot: &[[f64; N]; 6], i: usize| std::array::from_fn(|f| slot[f][i]);
     for pair in cache.slots[..cache.longest].chunks(2) {
         match pair {
@@ -242,6 +313,38 @@ fn culled<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
                 }
             }
             _ => unreachable!("chunks of at most two"),
+        }
+    }
+}
+
+/// The packed lists' terms (see the module documentation): per chunk, the
+/// items' positions gathered from their lanes, their terms in one SIMD loop,
+/// then each added to its lane in item order.
+#[inline(always)]
+fn packed<const N: usize, const FMA: bool>(
+    cache: &HotCache<N>,
+    [x, y, z]: [&[f64; N]; 3],
+    d: &mut [f64; N],
+    [gx, gy, gz]: [&mut [f64; N]; 3],
+) {
+    for chunk in &cache.chunks {
+        // `% N` keeps the index in bounds without a check (N is a power of
+        // two); every lane index is below N already.
+        let at = |v: &[f64; N], j: usize| v[chunk.lane[j] % N];
+        let mut t = [[0.0; N]; 4];
+        for j in 0..N {
+            let coef = std::array::from_fn(|f| chunk.coef[f][j]);
+            let term = hot_term::<FMA>(coef, at(x, j), at(y, j), at(z, j));
+            for k in 0..4 {
+                t[k][j] = term[k];
+            }
+        }
+        for j in 0..chunk.len {
+            let i = chunk.lane[j] % N;
+            d[i] += t[0][j];
+            gx[i] += t[1][j];
+            gy[i] += t[2][j];
+            gz[i] += t[3][j];
         }
     }
 }
@@ -287,11 +390,24 @@ fn layer_point<const FMA: bool, const BG: bool, const INV: bool>(
 /// operations of `LogisticField::delta_gradient`.
 #[inline(always)]
 fn hot_point<const FMA: bool>(
-    [amp, inv_rate, hx, hz, radius, edge]: [f64; 6],
+    spot: [f64; 6],
     x: f64,
     y: f64,
     z: f64,
     [d, gx, gy, gz]: [f64; 4],
+) -> [f64; 4] {
+    let [td, tx, ty, tz] = hot_term::<FMA>(spot, x, y, z);
+    [d + td, gx + tx, gy + ty, gz + tz]
+}
+
+/// One hot spot's (δ, ∂δ/∂x, ∂δ/∂y, ∂δ/∂z) at (x, y, z), with the operations
+/// of `LogisticField::delta_gradient`.
+#[inline(always)]
+fn hot_term<const FMA: bool>(
+    [amp, inv_rate, hx, hz, radius, edge]: [f64; 6],
+    x: f64,
+    y: f64,
+    z: f64,
 ) -> [f64; 4] {
     let dx = x - hx;
     let dz = z - hz;
@@ -309,10 +425,10 @@ fn hot_point<const FMA: bool>(
     let (s, ds) = sigmoid::<FMA>(y * inv_rate);
     let amp_s = amp * s;
     [
-        d + amp_s * w,
-        gx + amp_s * dw_drho * ux,
-        gy + amp * w * ds * inv_rate,
-        gz + amp_s * dw_drho * uz,
+        amp_s * w,
+        amp_s * dw_drho * ux,
+        amp * w * ds * inv_rate,
+        amp_s * dw_drho * uz,
     ]
 }
 
@@ -328,4 +444,100 @@ fn background_term<const FMA: bool>([amp, inv_rate]: [f64; 2], y: f64) -> (f64, 
 fn inversion_term<const FMA: bool>([amp, inv_rate, height]: [f64; 3], y: f64) -> (f64, f64) {
     let (s, ds) = sigmoid::<FMA>((height - y) * inv_rate);
     (amp * s, amp * ds * inv_rate)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::medium::{Background, HotSpot, IndexField, Inversion, LogisticMedium};
+
+    /// 400 patches over 2 km × 2 km on a background and an inversion.
+    fn desert() -> LogisticField {
+        let mut seed = 7_u64;
+        let mut uniform = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        LogisticMedium {
+            scale: 1.3,
+            background: Some(Background { n: 1.0, a: 40.0 }),
+            inversion: Some(Inversion {
+                n: 0.3,
+                a: 2.0,
+                height: 25.0,
+            }),
+            hotspots: (0..400)
+                .map(|_| HotSpot {
+                    x: -1000.0 + 2000.0 * uniform(),
+                    z: -1000.0 + 2000.0 * uniform(),
+                    radius: 10.0 + 30.0 * uniform(),
+                    n: -2.0,
+                    a: -0.8,
+                    edge: 1.0,
+                })
+                .collect(),
+        }
+        .field()
+    }
+
+    type Out = ([f64; 16], [[f64; 16]; 3]);
+
+    fn evaluate(c: &Coefficients, cache: &mut HotCache<16>, p: &[[f64; 16]; 3]) -> Out {
+        let (mut d, mut g) = ([0.0; 16], [[0.0; 16]; 3]);
+        let [gx, gy, gz] = &mut g;
+        c.delta_gradient::<16, false>(cache, [&p[0], &p[1], &p[2]], &mut d, [gx, gy, gz]);
+        (d, g)
+    }
+
+    /// Lanes scattered over the desert take the packed lists, and those give
+    /// bit for bit the lane-major slots' sums (each lane adds the same terms
+    /// in the same order), which equal the scalar field's to rounding.
+    #[test]
+    fn packed_lists_give_the_slots_sums() {
+        let field = desert();
+        let c = Coefficients::of(&field);
+        let grid = c.grid.as_ref().expect("a desert is culled");
+        let mut packed_steps = 0;
+        for step in 0..200 {
+            // A fan of lanes walking outwards from the origin.
+            let r = 5.0 * step as f64;
+            let p: [[f64; 16]; 3] = [
+                std::array::from_fn(|i| r * (0.1 * i as f64 - 0.75).sin()),
+                std::array::from_fn(|i| 0.2 + 0.1 * i as f64),
+                std::array::from_fn(|i| r * (0.1 * i as f64 - 0.75).cos()),
+            ];
+            let mut cache = HotCache::<16>::new(Some(grid));
+            let a = evaluate(&c, &mut cache, &p);
+            if !cache.packed {
+                continue;
+            }
+            packed_steps += 1;
+            let total: usize = cache.count.iter().sum();
+            assert!(total.div_ceil(16) < cache.longest);
+            assert_eq!(cache.chunks.len(), total.div_ceil(16));
+            cache.packed = false;
+            let b = evaluate(&c, &mut cache, &p);
+            let bits = |o: &Out| {
+                let mut v: Vec<u64> = o.0.iter().map(|x| x.to_bits()).collect();
+                v.extend(o.1.iter().flatten().map(|x| x.to_bits()));
+                v
+            };
+            assert_eq!(bits(&a), bits(&b), "step {step}");
+            for i in 0..16 {
+                let q = crate::math::V3::new(p[0][i], p[1][i], p[2][i]);
+                let (d, g) = field.delta_gradient(q);
+                // δ is ~10⁻⁴ at most: 10⁻¹⁸ is a hundred roundings of it.
+                assert!((a.0[i] - d).abs() <= 1e-18, "lane {i}: {} vs {d}", a.0[i]);
+                for (k, gk) in [g.x, g.y, g.z].into_iter().enumerate() {
+                    assert!(
+                        (a.1[k][i] - gk).abs() <= 1e-12 * gk.abs() + 1e-18,
+                        "lane {i}"
+                    );
+                }
+            }
+        }
+        assert!(packed_steps > 100, "only {packed_steps} of 200 packed");
+    }
 }
