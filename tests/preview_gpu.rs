@@ -193,8 +193,8 @@ fn gpu_matches_cpu_on_stratified_real_air() {
         "gpu_matches_cpu_on_stratified_real_air",
         "sea.json (real air)",
         scene,
-        320,
-        180,
+        160,
+        90,
     );
 }
 
@@ -219,8 +219,8 @@ fn gpu_matches_cpu_in_a_weak_duct_of_real_air() {
         "gpu_matches_cpu_in_a_weak_duct_of_real_air",
         "sea.json (weak duct)",
         scene,
-        320,
-        180,
+        160,
+        90,
     );
 }
 
@@ -233,21 +233,23 @@ fn gpu_matches_cpu_on_the_stratified_sea_at_a_5_m_step() {
         "gpu_matches_cpu_on_the_stratified_sea_at_a_5_m_step",
         "sea.json (5 m step)",
         scene,
-        320,
-        180,
+        160,
+        90,
     );
 }
 
 #[test]
 fn gpu_matches_cpu_on_stratified_real_air_at_a_5_m_step() {
+    // The smallest frame of these tests: lavapipe takes a minute for a
+    // 160×90 frame of this air at 5 m steps (rays up to 30 km).
     let mut scene = with_medium("sea.json", STRATIFIED_AIR);
     scene.step = 5.0;
     parity_of(
         "gpu_matches_cpu_on_stratified_real_air_at_a_5_m_step",
         "sea.json (real air, 5 m step)",
         scene,
-        320,
-        180,
+        96,
+        54,
     );
 }
 
@@ -265,7 +267,7 @@ fn gpu_frames_do_not_depend_on_their_passes_and_bands() {
         samples_per_pixel: Some(2),
         ..RenderOptions::default()
     };
-    let view = View::of_scene(&scene, &options, 96, 54);
+    let view = View::of_scene(&scene, &options, 64, 36);
     let mut buffers = mirage::preview::pack::pack(&scene, &scene.medium, &view).unwrap();
     use mirage::preview::gpu::{BAND_BYTES, Tracer};
     let frame = |buffers: &mirage::preview::pack::SceneBuffers, band_bytes: u64| {
@@ -274,7 +276,7 @@ fn gpu_frames_do_not_depend_on_their_passes_and_bands() {
         (pixels, tracer.passes(), tracer.bands())
     };
     let (whole, passes, one) = frame(&buffers, BAND_BYTES);
-    let row = 96 * std::mem::size_of::<mirage::preview::layout::GpuRay>() as u64;
+    let row = 64 * std::mem::size_of::<mirage::preview::layout::GpuRay>() as u64;
     let (banded, _, bands) = frame(&buffers, 10 * row);
     buffers.params.march[1] = 7;
     let (cut, many, _) = frame(&buffers, BAND_BYTES);
@@ -283,7 +285,7 @@ fn gpu_frames_do_not_depend_on_their_passes_and_bands() {
     eprintln!(
         "{test}: {passes} and {many} passes: {by_passes} pixels differ; {one} and {bands} bands: {by_bands}"
     );
-    assert!(many > 10 * passes && one == 1 && bands == 6);
+    assert!(many > 10 * passes && one == 1 && bands == 4);
     assert_eq!(by_passes, 0, "{by_passes} pixels differ");
     assert_eq!(by_bands, 0, "{by_bands} pixels differ");
 }
