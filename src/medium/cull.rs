@@ -251,10 +251,12 @@ impl HotSpotGrid {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn lcg(seed: &mut u64) -> f64 {
+    /// A uniform number in [0, 1) from a 64-bit LCG (the lanes' culling
+    /// test scatters its desert with it too).
+    pub(crate) fn lcg(seed: &mut u64) -> f64 {
         *seed = seed
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);

@@ -63,10 +63,9 @@ pub(crate) struct HotCache<const N: usize> {
     longest: usize,
     /// `slots[k][f][i]`: coefficient f of lane i's k-th hot spot.
     slots: Vec<[[f64; N]; 6]>,
-    /// The packed lists (see the module documentation), in use when
-    /// `packed` is true.
-    packed: bool,
-    /// Chunks of N (lane, hot spot) items; the last one may be partly full.
+    /// The packed lists (see the module documentation): chunks of N
+    /// (lane, hot spot) items, the last one possibly partly full; empty
+    /// when the lanes use their slots instead.
     chunks: Vec<Chunk<N>>,
 }
 
@@ -90,7 +89,6 @@ impl<const N: usize> HotCache<N> {
             count: [0; N],
             longest: 0,
             slots: vec![lane_major; grid.map_or(0, HotSpotGrid::longest)],
-            packed: false,
             chunks: Vec::new(),
         }
     }
@@ -108,9 +106,9 @@ impl<const N: usize> HotCache<N> {
         }
         if changed {
             self.longest = self.count.iter().copied().max().unwrap_or(0);
+            self.chunks.clear();
             let total: usize = self.count.iter().sum();
-            self.packed = total.div_ceil(N) < self.longest;
-            if self.packed {
+            if total.div_ceil(N) < self.longest {
                 self.pack();
             }
         }
@@ -125,7 +123,6 @@ impl<const N: usize> HotCache<N> {
             lane: [0; N],
             len: 0,
         };
-        self.chunks.clear();
         let mut chunk = empty;
         for (k, slot) in self.slots[..self.longest].iter().enumerate() {
             for i in 0..N {
@@ -291,7 +288,7 @@ fn culled<const N: usize, const FMA: bool, const BG: bool, const INV: bool>(
     if BG || INV {
         layer_loop::<N, FMA, BG, INV>(bg, inv, y, d, gy);
     }
-    if cache.packed {
+    if !cache.chunks.is_empty() {
         return packed::<N, FMA>(cache, [x, y, z], d, [gx, gy, gz]);
     }
     let lane = |slot: &[[f64; N]; 6], i: usize| std::array::from_fn(|f| slot[f][i]);
@@ -454,12 +451,7 @@ mod tests {
     /// 400 patches over 2 km × 2 km on a background and an inversion.
     fn desert() -> LogisticField {
         let mut seed = 7_u64;
-        let mut uniform = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = move || crate::medium::cull::tests::lcg(&mut seed);
         LogisticMedium {
             scale: 1.3,
             background: Some(Background { n: 1.0, a: 40.0 }),
@@ -510,14 +502,15 @@ mod tests {
             ];
             let mut cache = HotCache::<16>::new(Some(grid));
             let a = evaluate(&c, &mut cache, &p);
-            if !cache.packed {
+            if cache.chunks.is_empty() {
                 continue;
             }
             packed_steps += 1;
             let total: usize = cache.count.iter().sum();
             assert!(total.div_ceil(16) < cache.longest);
             assert_eq!(cache.chunks.len(), total.div_ceil(16));
-            cache.packed = false;
+            // The same lists from the lane-major slots.
+            cache.chunks.clear();
             let b = evaluate(&c, &mut cache, &p);
             let bits = |o: &Out| {
                 let mut v: Vec<u64> = o.0.iter().map(|x| x.to_bits()).collect();
