@@ -9,9 +9,10 @@
 //! the derivative: no step-control noise, unlike finite differences.
 
 use crate::math::Real;
-use crate::medium::{Medium, PairFields, Param};
+use crate::medium::{Field, Medium, PairFields, Param};
 use crate::pair::PointPair;
 use crate::problem::Problem;
+use crate::trace::batch::tangent::trace_tangent;
 use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
 use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};
@@ -24,6 +25,16 @@ const CHUNK: usize = 8;
 
 /// Rays per task of the lanes kernel (its widest lane count).
 const LANE_CHUNK: usize = 16;
+
+/// Rays per task of the tangent lanes (their lane count).
+const TANGENT_CHUNK: usize = 8;
+
+/// The dual numbers of a pass over `N` parameters.
+type D<const N: usize> = DualSVec64<N>;
+
+/// One pair's rows: its residual, the residual's derivatives `[c][k]` along
+/// the pass's parameters, and the ray's right-hand-side evaluations.
+type Row<const N: usize> = ([f64; 3], [[f64; N]; 3], u64);
 
 /// Flags of one pair at a parameter point.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -188,8 +199,22 @@ impl Objective {
         if f.is_finite() { f } else { f64::INFINITY }
     }
 
-    /// Residuals and the exact 3m × n Jacobian at `x`.
+    /// Residuals and the exact 3m × n Jacobian at `x`: for the logistic
+    /// model in the tangent lanes (`trace::batch::tangent`), for the other
+    /// kinds (and any ray that does not end on its plane) by dual numbers
+    /// through the scalar tracer ([`Objective::jacobian_dual`]); both
+    /// differentiate the same discrete map and agree to rounding.
     pub fn jacobian(&self, x: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        self.jacobian_by(x, true)
+    }
+
+    /// [`Objective::jacobian`] on the dual-number path alone: the reference
+    /// the tangent lanes are checked against.
+    pub fn jacobian_dual(&self, x: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        self.jacobian_by(x, false)
+    }
+
+    fn jacobian_by(&self, x: &[f64], lanes: bool) -> (DVector<f64>, DMatrix<f64>) {
         self.jacobian_evaluations.fetch_add(1, Ordering::Relaxed);
         let n = self.free.len();
         let mut r = DVector::zeros(self.len());
@@ -200,55 +225,70 @@ impl Objective {
             let width = (n - first).min(CHUNK);
             let cols = first..first + width;
             match width {
-                0..=2 => self.jacobian_chunk::<2>(&base, cols, &mut r, &mut jac),
-                3..=4 => self.jacobian_chunk::<4>(&base, cols, &mut r, &mut jac),
-                _ => self.jacobian_chunk::<8>(&base, cols, &mut r, &mut jac),
+                0..=2 => self.jacobian_chunk::<2>(&base, cols, lanes, &mut r, &mut jac),
+                3..=4 => self.jacobian_chunk::<4>(&base, cols, lanes, &mut r, &mut jac),
+                _ => self.jacobian_chunk::<8>(&base, cols, lanes, &mut r, &mut jac),
             }
             first += width.max(1);
         }
         (r, jac)
     }
 
+    /// `base` in dual numbers of width `W`, seeded on the parameters
+    /// `cols` (derivative part k on `free[cols.start + k]`).
+    fn seeded<const W: usize>(&self, base: &Medium, cols: &std::ops::Range<usize>) -> Medium<D<W>> {
+        base.map(|p, v| {
+            let lane = self.free[cols.clone()].iter().position(|q| *q == p);
+            match lane {
+                Some(k) => D::<W>::from_re(v).derivative(k),
+                None => D::<W>::from_re(v),
+            }
+        })
+    }
+
     fn jacobian_chunk<const N: usize>(
         &self,
         base: &Medium,
         cols: std::ops::Range<usize>,
+        lanes: bool,
         r: &mut DVector<f64>,
         jac: &mut DMatrix<f64>,
     ) {
-        type D<const N: usize> = DualSVec64<N>;
-        let seeded = base.map(|p, v| {
-            let lane = self.free[cols.clone()].iter().position(|q| *q == p);
-            match lane {
-                Some(k) => D::<N>::from_re(v).derivative(k),
-                None => D::<N>::from_re(v),
+        let mut rows: Vec<Option<Row<N>>> = vec![None; self.pairs.len()];
+        if lanes {
+            // The tangent kernel is built for 4 and 8 seeds only (each width
+            // is a kernel per instruction set and ground): a pass of 2 takes
+            // the one of 4 with two idle seeds.
+            let plain = self.fields(base);
+            if N <= 4 {
+                let seeded = self.fields(&self.seeded::<4>(base, &cols));
+                self.tangent_rows::<N, 4>(&plain, &seeded, &mut rows);
+            } else {
+                let seeded = self.fields(&self.seeded::<8>(base, &cols));
+                self.tangent_rows::<N, 8>(&plain, &seeded, &mut rows);
             }
-        });
-        // The per-wavelength media come from the seeded one, so they carry
-        // the same derivative parts: the Jacobian stays exact.
-        let fields = self.fields(&seeded);
-        let rows: Vec<([f64; 3], [[f64; N]; 3], u64)> = self
-            .pairs
+        }
+        // Whatever the lanes did not give: dual numbers, pair by pair. The
+        // per-wavelength media come from the seeded one, so they carry the
+        // same derivative parts: the Jacobian stays exact.
+        let missing: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].is_none()).collect();
+        let fields = if missing.is_empty() {
+            None
+        } else {
+            Some(self.fields(&self.seeded::<N>(base, &cols)))
+        };
+        let dual: Vec<Row<N>> = missing
             .par_iter()
-            .enumerate()
-            .map(|(i, pair)| {
-                if crate::interrupt::requested() {
-                    // Ctrl-C: as in `residuals`, a row to be discarded.
-                    return ([0.0; 3], [[0.0; N]; 3], 0);
-                }
-                let (t, res) = pair.evaluate::<D<N>, _>(fields.of(i), &self.options, None);
-                let comps = [res.x, res.y, res.z];
-                let mut d = [[0.0; N]; 3];
-                for (row, c) in d.iter_mut().zip(&comps) {
-                    // A residual that does not depend on the chunk's parameters
-                    // carries no derivative part: unwrap_generic gives zeros then.
-                    let eps = c.eps.unwrap_generic(nalgebra::Const::<N>, nalgebra::U1);
-                    row.copy_from_slice(eps.as_slice());
-                }
-                (comps.map(|c| c.re()), d, t.stats.rhs_evaluations)
+            .map(|&i| {
+                let fields = fields.as_ref().expect("compiled when a row is missing");
+                self.dual_row::<N>(fields.of(i), i)
             })
             .collect();
-        for (i, (ri, di, evals)) in rows.into_iter().enumerate() {
+        for (i, row) in missing.into_iter().zip(dual) {
+            rows[i] = Some(row);
+        }
+        for (i, row) in rows.into_iter().enumerate() {
+            let (ri, di, evals) = row.expect("every row is filled");
             for c in 0..3 {
                 r[3 * i + c] = ri[c];
                 for (k, col) in cols.clone().enumerate() {
@@ -257,6 +297,66 @@ impl Objective {
             }
             self.rhs_evaluations.fetch_add(evals, Ordering::Relaxed);
         }
+    }
+
+    /// The rows of the pairs whose field is the logistic model, by the
+    /// tangent lanes with `P ≥ N` seeds (the first N of them those of the
+    /// pass), in chunks traced in parallel (a fixed split: the result does
+    /// not depend on the number of threads). A ray that does not end on its
+    /// plane keeps `None`.
+    fn tangent_rows<const N: usize, const P: usize>(
+        &self,
+        plain: &PairFields,
+        seeded: &PairFields<D<P>>,
+        rows: &mut [Option<Row<N>>],
+    ) {
+        let batch = BatchOptions::from_trace_options(&self.options);
+        for (g, (field, dual)) in plain.fields().iter().zip(seeded.fields()).enumerate() {
+            let (Field::Logistic(field), Field::Logistic(dual)) = (field, dual) else {
+                continue;
+            };
+            let members: Vec<usize> = (0..self.pairs.len())
+                .filter(|&i| plain.groups()[i] == g)
+                .collect();
+            let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
+            let mut traces = vec![Trace::default(); members.len()];
+            let ends: Vec<_> = jobs
+                .par_chunks(TANGENT_CHUNK)
+                .zip(traces.par_chunks_mut(TANGENT_CHUNK))
+                .flat_map_iter(|(jobs, part)| {
+                    if crate::interrupt::requested() {
+                        // Ctrl-C: rows to be discarded (see `residuals`).
+                        return vec![None; jobs.len()];
+                    }
+                    trace_tangent::<P>(field, dual, jobs, &batch, part)
+                })
+                .collect();
+            for ((i, t), end) in members.into_iter().zip(traces).zip(ends) {
+                let Some(d) = end else { continue };
+                let pair = &self.pairs[i];
+                let ri = (t.endpoint - pair.target()) * pair.weight;
+                let di = d.map(|c| std::array::from_fn(|k| c[k] * pair.weight));
+                rows[i] = Some((ri.to_array(), di, t.stats.rhs_evaluations));
+            }
+        }
+    }
+
+    /// Pair `i`'s row by dual numbers through the scalar tracer.
+    fn dual_row<const N: usize>(&self, field: &Field<D<N>>, i: usize) -> Row<N> {
+        if crate::interrupt::requested() {
+            // Ctrl-C: as in `residuals`, a row to be discarded.
+            return ([0.0; 3], [[0.0; N]; 3], 0);
+        }
+        let (t, res) = self.pairs[i].evaluate::<D<N>, _>(field, &self.options, None);
+        let comps = [res.x, res.y, res.z];
+        let mut d = [[0.0; N]; 3];
+        for (row, c) in d.iter_mut().zip(&comps) {
+            // A residual that does not depend on the chunk's parameters
+            // carries no derivative part: unwrap_generic gives zeros then.
+            let eps = c.eps.unwrap_generic(nalgebra::Const::<N>, nalgebra::U1);
+            row.copy_from_slice(eps.as_slice());
+        }
+        (comps.map(|c| c.re()), d, t.stats.rhs_evaluations)
     }
 
     /// Counts so far: (residual evaluations, Jacobian evaluations, right-hand-side

@@ -513,23 +513,24 @@ impl<T> LogisticField<T> {
     }
 }
 
-/// [`LogisticField<f64>`]'s compiled coefficients as plain numbers, for the
-/// SIMD tracer (`trace::batch`), which evaluates the same formula lane-wise.
+/// A [`LogisticField`]'s compiled coefficients as plain arrays, for the
+/// SIMD tracer (`trace::batch`), which evaluates the same formula lane-wise
+/// (in `f64`, or from a dual-number field for its tangent kernel).
 #[derive(Clone, Debug)]
-pub(crate) struct RawCoefficients {
+pub(crate) struct RawCoefficients<T = f64> {
     /// Background `[amp, 1/a]`.
-    pub background: Option<[f64; 2]>,
+    pub background: Option<[T; 2]>,
     /// Inversion `[amp, 1/a, height]`.
-    pub inversion: Option<[f64; 3]>,
+    pub inversion: Option<[T; 3]>,
     /// Per hot spot `[amp, 1/a, x, z, radius, edge]`.
-    pub hotspots: Vec<[f64; 6]>,
+    pub hotspots: Vec<[T; 6]>,
     /// The grid that culls them, if any.
     pub grid: Option<HotSpotGrid>,
 }
 
-impl LogisticField<f64> {
-    /// The compiled coefficients as plain numbers (see [`RawCoefficients`]).
-    pub(crate) fn coefficients(&self) -> RawCoefficients {
+impl<T: Copy> LogisticField<T> {
+    /// The compiled coefficients as plain arrays (see [`RawCoefficients`]).
+    pub(crate) fn coefficients(&self) -> RawCoefficients<T> {
         RawCoefficients {
             background: self.background.map(|l| [l.amp, l.inv_rate]),
             inversion: self.inversion.map(|(l, h)| [l.amp, l.inv_rate, h]),

@@ -59,6 +59,11 @@ pub(crate) trait Kernel<const N: usize> {
     fn segment(&self, lane: usize) -> Segment<f64>;
     /// The traced point of `lane` nearest its plane so far.
     fn nearest(&self, lane: usize) -> RayState;
+    /// The ray of `job` (index `index` in the batch) in `lane` has ended,
+    /// crossing its plane at θ = `plane` of its last step if `Some`, before
+    /// the lane takes the next job. Nothing by default.
+    #[inline(always)]
+    fn finished(&mut self, _lane: usize, _index: usize, _job: &RayJob, _plane: Option<f64>) {}
 }
 
 /// Bookkeeping of the ray in one lane.
@@ -141,16 +146,11 @@ pub(crate) fn drive<K: Kernel<N>, const N: usize, const FMA: bool>(
                 // The step underflowed (the scalar tracer gives up there), or
                 // a rejected attempt was the last one allowed.
                 let best = kernel.nearest(lane);
-                Some(finished(
-                    best.x,
-                    best.v,
-                    best.s,
-                    End::StepLimit,
-                    slot,
-                    stages,
-                ))
+                let t = finished(best.x, best.v, best.s, End::StepLimit, slot, stages);
+                Some((t, None))
             };
-            if let Some(t) = done {
+            if let Some((t, plane)) = done {
+                kernel.finished(lane, slot.job, job, plane);
                 out[slot.job] = t;
                 refill(
                     kernel, lane, jobs, options, out, &mut next, &mut slots, &mut live, global,
@@ -214,7 +214,8 @@ fn refill<K: Kernel<N>, const N: usize>(
 
 /// The scalar tracer's logic after one accepted step (the ceiling, the events
 /// of [`decide_step`], then the step limit, as `trace` checks them): the
-/// finished trace if the ray ends in this step.
+/// finished trace if the ray ends in this step, with the step's θ where it
+/// crosses its plane (if that is how it ends).
 #[allow(clippy::too_many_arguments)]
 fn after_step(
     seg: &Segment<f64>,
@@ -225,10 +226,10 @@ fn after_step(
     ceiling: f64,
     stages: u64,
     nearest: impl FnOnce() -> RayState,
-) -> Option<Trace> {
+) -> Option<(Trace, Option<f64>)> {
     if options.earth.height(seg.y1.x) > ceiling {
         let y1 = &seg.y1;
-        return Some(finished(y1.x, y1.v, y1.s, End::LeftAir, slot, stages));
+        return Some((finished(y1.x, y1.v, y1.s, End::LeftAir, slot, stages), None));
     }
     let t = &job.target;
     let events = decide_step(seg, Some(t), options.ground, slot.max_length, options.earth);
@@ -236,18 +237,19 @@ fn after_step(
     let end = match events.end {
         Some(StepEnd::Plane(theta)) => {
             let (e, st) = locate(seg, seg, theta, t.normal, t.point);
-            return Some(finished(e, st.v, st.s, End::Plane, slot, stages));
+            let trace = finished(e, st.v, st.s, End::Plane, slot, stages);
+            return Some((trace, Some(theta)));
         }
         Some(StepEnd::Ground(theta)) => {
             let (e, st) = locate_ground(seg, seg, theta, options.earth);
-            return Some(finished(e, st.v, st.s, End::Ground, slot, stages));
+            return Some((finished(e, st.v, st.s, End::Ground, slot, stages), None));
         }
         Some(StepEnd::MaxLength) => End::MaxLength,
         None if attempts >= options.max_steps => End::StepLimit,
         None => return None,
     };
     let best = nearest();
-    Some(finished(best.x, best.v, best.s, end, slot, stages))
+    Some((finished(best.x, best.v, best.s, end, slot, stages), None))
 }
 
 /// A finished trace (a target plane is always given, so any other end than the

@@ -228,6 +228,18 @@ impl<B: LaneBuf<N, M>, const N: usize, const M: usize> LaneSet<B, N, M> {
         (&mut self.control, y0, &mut self.stages, y1)
     }
 
+    /// The current state's buffer (a kernel writes what `LaneBuf::put`
+    /// leaves out, such as the tangent kernel's derivative parts).
+    pub(crate) fn current_mut(&mut self) -> &mut B {
+        &mut self.buf[self.cur]
+    }
+
+    /// The previous and the current state's buffers: the start and end of
+    /// the last step.
+    pub(crate) fn buffers(&self) -> (&B, &B) {
+        (&self.buf[self.cur ^ 1], &self.buf[self.cur])
+    }
+
     /// After a step written by [`Self::step_parts`]: the new state becomes
     /// the current one.
     #[inline(always)]

@@ -74,8 +74,10 @@
 //! step control over lanes), `field` (the medium lane-wise: the trait and the
 //! logistic kind), `terms` (the logistic model's terms), `air` (real air),
 //! `kernel` (the 3-D kernel), [`stratified`] (the 2-D one), `driver` (job
-//! scheduling, lane refill, freezing, events) and `isa` (instruction sets and
-//! the run-time dispatch).
+//! scheduling, lane refill, freezing, events), `isa` (instruction sets and
+//! the run-time dispatch), `num` (the numbers the terms are written in:
+//! `f64` and forward-mode tangents) and `tangent` (the 3-D kernel with each
+//! ray's parameter sensitivities: the fit's exact Jacobian in lanes).
 
 mod adaptive;
 mod air;
@@ -85,7 +87,9 @@ mod isa;
 mod job;
 mod kernel;
 mod lanes;
+mod num;
 pub mod stratified;
+pub(crate) mod tangent;
 mod terms;
 
 pub use isa::{Isa, exp_in_place};

@@ -31,9 +31,9 @@
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
+use super::num::LaneNum;
 use crate::medium::LogisticField;
 use crate::medium::cull::HotSpotGrid;
-use crate::trace::fastexp::{fmadd, sigmoid};
 
 /// The compiled field as plain numbers (see `LogisticField::coefficients`).
 #[derive(Clone, Debug)]
@@ -331,7 +331,7 @@ fn packed<const N: usize, const FMA: bool>(
         let mut t = [[0.0; N]; 4];
         for j in 0..N {
             let coef = std::array::from_fn(|f| chunk.coef[f][j]);
-            let term = hot_term::<FMA>(coef, at(x, j), at(y, j), at(z, j));
+            let term = hot_term::<f64, FMA>(coef, at(x, j), at(y, j), at(z, j));
             for k in 0..4 {
                 t[k][j] = term[k];
             }
@@ -371,12 +371,12 @@ fn layer_point<const FMA: bool, const BG: bool, const INV: bool>(
     mut gy: f64,
 ) -> (f64, f64) {
     if BG {
-        let (db, gb) = background_term::<FMA>(bg, y);
+        let (db, gb) = background_term::<f64, FMA>(bg, y);
         d += db;
         gy += gb;
     }
     if INV {
-        let (di, gi) = inversion_term::<FMA>(inv, y);
+        let (di, gi) = inversion_term::<f64, FMA>(inv, y);
         d += di;
         gy -= gi;
     }
@@ -393,33 +393,63 @@ fn hot_point<const FMA: bool>(
     z: f64,
     [d, gx, gy, gz]: [f64; 4],
 ) -> [f64; 4] {
-    let [td, tx, ty, tz] = hot_term::<FMA>(spot, x, y, z);
+    let [td, tx, ty, tz] = hot_term::<f64, FMA>(spot, x, y, z);
     [d + td, gx + tx, gy + ty, gz + tz]
 }
 
 /// One hot spot's (δ, ∂δ/∂x, ∂δ/∂y, ∂δ/∂z) at (x, y, z), with the operations
-/// of `LogisticField::delta_gradient`.
+/// of `LogisticField::delta_gradient`; in [`Tan`](super::num::Tan) numbers
+/// (the tangent kernel) also their derivatives along its seeds. It is its
+/// three parts in a row ([`rim_part`], [`layer_part`], [`hot_combine`]),
+/// which the tangent kernel runs as three lane loops.
 #[inline(always)]
-fn hot_term<const FMA: bool>(
-    [amp, inv_rate, hx, hz, radius, edge]: [f64; 6],
-    x: f64,
-    y: f64,
-    z: f64,
-) -> [f64; 4] {
+pub(crate) fn hot_term<T: LaneNum, const FMA: bool>(
+    [amp, inv_rate, hx, hz, radius, edge]: [T; 6],
+    x: T,
+    y: T,
+    z: T,
+) -> [T; 4] {
+    let rim = rim_part::<T, FMA>([hx, hz, radius, edge], x, z);
+    let layer = layer_part::<T, FMA>(inv_rate, y);
+    hot_combine(amp, inv_rate, rim, layer)
+}
+
+/// A hot spot's rim at (x, z): `[w, dw/dρ, ρ̂_x, ρ̂_z]`.
+#[inline(always)]
+pub(crate) fn rim_part<T: LaneNum, const FMA: bool>(
+    [hx, hz, radius, edge]: [T; 4],
+    x: T,
+    z: T,
+) -> [T; 4] {
     let dx = x - hx;
     let dz = z - hz;
     // ρ without the scalar code's rescaling: an overflow to ∞ for
     // |dx| > 10¹⁵⁴ still gives w = 0 and a zero gradient, not NaN.
-    let rho = fmadd::<FMA>(dx, dx, dz * dz).sqrt();
-    let (w, dw) = sigmoid::<FMA>(edge * (radius - rho));
+    let rho = T::fmadd::<FMA>(dx, dx, dz * dz).sqrt();
+    let (w, dw) = (edge * (radius - rho)).sigmoid::<FMA>();
     let dw_drho = -(edge * dw);
     // At the cone tip (ρ = 0) the horizontal derivative is 0; so it is where
     // dx² + dz² underflows (within 10⁻¹⁶² m of the centre), where ρ = 0 too
     // and dx/ρ would blow up.
-    let inv_rho = if rho > 0.0 { 1.0 / rho } else { 0.0 };
-    let ux = dx * inv_rho;
-    let uz = dz * inv_rho;
-    let (s, ds) = sigmoid::<FMA>(y * inv_rate);
+    let inv_rho = rho.recip_or_zero();
+    [w, dw_drho, dx * inv_rho, dz * inv_rho]
+}
+
+/// A hot spot's layer at height y: `[σ(y/a), σ'(y/a)]`.
+#[inline(always)]
+pub(crate) fn layer_part<T: LaneNum, const FMA: bool>(inv_rate: T, y: T) -> [T; 2] {
+    let (s, ds) = (y * inv_rate).sigmoid::<FMA>();
+    [s, ds]
+}
+
+/// A hot spot's terms from its rim and layer parts.
+#[inline(always)]
+pub(crate) fn hot_combine<T: LaneNum>(
+    amp: T,
+    inv_rate: T,
+    [w, dw_drho, ux, uz]: [T; 4],
+    [s, ds]: [T; 2],
+) -> [T; 4] {
     let amp_s = amp * s;
     [
         amp_s * w,
@@ -431,15 +461,21 @@ fn hot_term<const FMA: bool>(
 
 /// The background's (δ, dδ/dy) at height y.
 #[inline(always)]
-fn background_term<const FMA: bool>([amp, inv_rate]: [f64; 2], y: f64) -> (f64, f64) {
-    let (s, ds) = sigmoid::<FMA>(y * inv_rate);
+pub(crate) fn background_term<T: LaneNum, const FMA: bool>(
+    [amp, inv_rate]: [T; 2],
+    y: T,
+) -> (T, T) {
+    let (s, ds) = (y * inv_rate).sigmoid::<FMA>();
     (amp * s, amp * ds * inv_rate)
 }
 
 /// The inversion's δ and −dδ/dy at height y (subtracted, as in the scalar code).
 #[inline(always)]
-fn inversion_term<const FMA: bool>([amp, inv_rate, height]: [f64; 3], y: f64) -> (f64, f64) {
-    let (s, ds) = sigmoid::<FMA>((height - y) * inv_rate);
+pub(crate) fn inversion_term<T: LaneNum, const FMA: bool>(
+    [amp, inv_rate, height]: [T; 3],
+    y: T,
+) -> (T, T) {
+    let (s, ds) = ((height - y) * inv_rate).sigmoid::<FMA>();
     (amp * s, amp * ds * inv_rate)
 }
 
