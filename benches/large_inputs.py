@@ -6,6 +6,8 @@ Prints a Markdown table (the README's "Large inputs" section is what this prints
 * `trace` of N pairs (25k ... 200k): a full medium (background, inversion, one hot
   spot), rays of 300 m at 1 m RK4 steps, one thread, with a JSON report written.
   Time and peak RSS should both grow linearly in N: the table gives them per pair.
+* `trace` of 2,000 pairs of 1.5 km at 1 m RK4 steps through the same medium: the
+  throughput of the whole process in million steps per second (best of 5).
 * a problem file of ~50 and ~100 MB (pairs whose rays are 1 m long, so that reading,
   validating and writing dominate): parsing must not have a quadratic step, so the
   100 MB file should take about twice the 50 MB one.
@@ -100,6 +102,21 @@ def main():
                 f"| {n:,} pairs, 300 m at 1 m RK4 | {mb:.1f} MB | {wall:.2f} s | {rss:.0f} MiB"
                 f" | {wall / n * 1e6:.0f} µs, {rss * 1024 / n:.2f} KiB |"
             )
+
+        # throughput of the whole process: 2,000 pairs of 1.5 km at 1 m RK4 steps
+        # through the full medium (issue #14's figure: >= 20 M steps/s)
+        print("\n| `mirage --threads 1 trace`, full medium | steps | wall | M RK4 steps/s, whole process |")
+        print("|---|---|---|---|")
+        n = 200 if a.quick else 2_000
+        p = os.path.join(d, "speed.json")
+        with open(p, "w") as f:
+            json.dump(problem(n, 1500.0, rk4), f)
+        out = os.path.join(d, "speed.out.json")
+        best = min(measure([mirage, "--threads", "1", "trace", p, "-o", out])[0] for _ in range(5))
+        with open(out) as f:
+            steps = json.load(f)["stats"]["accepted_steps"]
+        os.remove(out)
+        print(f"| {n:,} pairs, 1.5 km at 1 m | {steps:,} | {best:.3f} s (best of 5) | {steps / best / 1e6:.1f} |")
 
         # parsing: ~50 and ~100 MB of 1 m rays
         print("\n| problem file | pairs | wall | peak RSS | per MB |")

@@ -388,20 +388,35 @@ fn bench_objective(c: &mut Criterion) {
         group.bench_function("jacobian", |b| {
             b.iter(|| pool.install(|| objective.jacobian(black_box(&x))))
         });
+        group.bench_function("jacobian dual", |b| {
+            b.iter(|| pool.install(|| objective.jacobian_dual(black_box(&x))))
+        });
         group.finish();
     }
 }
 
-/// desert-lake as written (Dormand–Prince), and with RK4 at 1 m steps.
+/// desert-lake as written (Dormand–Prince), the 36-pair, 6-parameter sweep
+/// problem (Dormand–Prince, and RK4 at 0.5 m over 2.5 km), and desert-lake
+/// with RK4 at 1 m steps (last: the table's batch comparison takes it).
 fn objectives() -> Vec<(String, Objective)> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/desert-lake.json");
-    let p = Problem::load(&path).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let p = Problem::load(&root.join("problems/desert-lake.json")).unwrap();
     let rk4 = Objective::new(p.medium.clone(), p.free.clone(), p.pairs.clone(), options());
+    let sweep = |name: &str| {
+        let path = root
+            .join("benches/baseline/problems")
+            .join(format!("{name}.json"));
+        let q = Problem::load(&path).unwrap();
+        let label = format!("{name} ({})", q.trace.method.name());
+        (label, Objective::from_problem(&q))
+    };
     vec![
         (
             format!("desert-lake ({})", p.trace.method.name()),
             Objective::from_problem(&p),
         ),
+        sweep("sweep-36x6"),
+        sweep("sweep-36x6-rk4"),
         ("desert-lake (rk4 1 m)".to_string(), rk4),
     ]
 }
@@ -512,8 +527,12 @@ fn table() {
         .build()
         .unwrap();
     println!(
-        "\nOne exact Jacobian against one residual evaluation, one thread (best wall time):\n"
+        "\nOne exact Jacobian against one residual evaluation, one thread (best wall time): the tangent lanes and the dual-number reference\n"
     );
+    println!(
+        "| problem | pairs | free | residuals | Jacobian, tangent lanes | Jacobians/s | in residuals | Jacobian, dual numbers | in residuals | lanes speed-up |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for (label, objective) in objectives() {
         let x: Vec<f64> = objective.start().iter().copied().collect();
         let r = best_wall_time(|| {
@@ -522,12 +541,20 @@ fn table() {
         let j = best_wall_time(|| {
             pool.install(|| black_box(objective.jacobian(&x)));
         });
+        let d = best_wall_time(|| {
+            pool.install(|| black_box(objective.jacobian_dual(&x)));
+        });
         println!(
-            "- {label}: residuals {:.2} ms, Jacobian ({} parameters) {:.2} ms = {:.1} × residuals",
-            r * 1e3,
+            "| {label} | {} | {} | {:.2} ms | {:.2} ms | {:.0} | {:.1} | {:.2} ms | {:.1} | {:.1}× |",
+            objective.pairs().len(),
             objective.free().len(),
+            r * 1e3,
             j * 1e3,
-            j / r
+            1.0 / j,
+            j / r,
+            d * 1e3,
+            d / r,
+            d / j
         );
     }
     // What wiring the kernel into the fitter would give: the same residuals
