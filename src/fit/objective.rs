@@ -157,10 +157,7 @@ impl Objective {
         // One batch per wavelength (a single one, of every pair in order,
         // without per-pair wavelengths).
         for (g, field) in fields.fields().iter().enumerate() {
-            let members: Vec<usize> = (0..self.pairs.len())
-                .filter(|&i| fields.groups()[i] == g)
-                .collect();
-            let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
+            let (members, jobs) = self.group(fields.groups(), g);
             let mut part = vec![Trace::default(); members.len()];
             // Chunks of one lane width; the split is fixed, so threads only
             // change who computes a chunk, not what it computes.
@@ -190,6 +187,14 @@ impl Objective {
                 .fetch_add(t.stats.rhs_evaluations, Ordering::Relaxed);
         }
         (r, flags)
+    }
+
+    /// The pairs traced through field `g` (per pair, its field index in
+    /// `groups`), in order, and their ray jobs.
+    fn group(&self, groups: &[usize], g: usize) -> (Vec<usize>, Vec<RayJob>) {
+        let members: Vec<usize> = (0..self.pairs.len()).filter(|&i| groups[i] == g).collect();
+        let jobs = members.iter().map(|&i| self.jobs[i]).collect();
+        (members, jobs)
     }
 
     /// F = ½|r|² at `x` (∞ where the residuals are not finite).
@@ -315,10 +320,7 @@ impl Objective {
             let (Field::Logistic(field), Field::Logistic(dual)) = (field, dual) else {
                 continue;
             };
-            let members: Vec<usize> = (0..self.pairs.len())
-                .filter(|&i| plain.groups()[i] == g)
-                .collect();
-            let jobs: Vec<RayJob> = members.iter().map(|&i| self.jobs[i]).collect();
+            let (members, jobs) = self.group(plain.groups(), g);
             let mut traces = vec![Trace::default(); members.len()];
             let ends: Vec<_> = jobs
                 .par_chunks(TANGENT_CHUNK)

@@ -59,6 +59,32 @@ pub(crate) fn error_term<const N: usize>(k: [&[f64; N]; 6], h: &[f64; N], out: &
     }
 }
 
+/// The squared error norm of a 3-D attempt per lane, as the scalar
+/// stepper's: the error terms of the position (from the rates `v[c]` of
+/// component c of v: k1, k3 … k7) and of v (from the rates `a[c]`),
+/// squared and summed, the position's three before v's three.
+#[inline(always)]
+pub(crate) fn error_norm2<const N: usize>(
+    v: [[&[f64; N]; 6]; 3],
+    a: [[&[f64; N]; 6]; 3],
+    h: &[f64; N],
+) -> [f64; N] {
+    let mut e = [[0.0; N]; 6];
+    let [ex, ey, ez, evx, evy, evz] = &mut e;
+    error_term(v[0], h, ex);
+    error_term(v[1], h, ey);
+    error_term(v[2], h, ez);
+    error_term(a[0], h, evx);
+    error_term(a[1], h, evy);
+    error_term(a[2], h, evz);
+    let mut err2 = [0.0; N];
+    for i in 0..N {
+        err2[i] = (ex[i] * ex[i] + ey[i] * ey[i] + ez[i] * ez[i])
+            + (evx[i] * evx[i] + evy[i] * evy[i] + evz[i] * evz[i]);
+    }
+    err2
+}
+
 /// The error estimate's component per lane for a rate that is the same
 /// constant `v` at every stage (a planar step's horizontal velocity):
 /// `stepper::error_sum([v; 6])·h`, a rounding residue of Σ E_j = 0.

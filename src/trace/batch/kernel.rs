@@ -6,7 +6,7 @@
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
-use super::adaptive::{advance, error_term, judge, keep, prepare};
+use super::adaptive::{advance, error_norm2, judge, keep, prepare};
 use super::air::AirLanes;
 use super::driver::Kernel;
 use super::field::{EarthLanes, LaneField, LogisticLanes};
@@ -409,19 +409,19 @@ fn dopri5_3d<F: LaneField, const N: usize, const FMA: bool>(
     );
     y1.set_rate::<F, FMA>(f, cache);
     // The error estimate: position from the stages' v, v from their a.
-    let mut e = [[0.0; N]; 6];
-    let [ex, ey, ez, evx, evy, evz] = &mut e;
-    error_term([&y0.vx, &k3.vx, &k4.vx, &k5.vx, &k6.vx, &y1.vx], &h, ex);
-    error_term([&y0.vy, &k3.vy, &k4.vy, &k5.vy, &k6.vy, &y1.vy], &h, ey);
-    error_term([&y0.vz, &k3.vz, &k4.vz, &k5.vz, &k6.vz, &y1.vz], &h, ez);
-    error_term([&y0.ax, &k3.ax, &k4.ax, &k5.ax, &k6.ax, &y1.ax], &h, evx);
-    error_term([&y0.ay, &k3.ay, &k4.ay, &k5.ay, &k6.ay, &y1.ay], &h, evy);
-    error_term([&y0.az, &k3.az, &k4.az, &k5.az, &k6.az, &y1.az], &h, evz);
-    let mut err2 = [0.0; N];
-    for i in 0..N {
-        err2[i] = (ex[i] * ex[i] + ey[i] * ey[i] + ez[i] * ez[i])
-            + (evx[i] * evx[i] + evy[i] * evy[i] + evz[i] * evz[i]);
-    }
+    let err2 = error_norm2(
+        [
+            [&y0.vx, &k3.vx, &k4.vx, &k5.vx, &k6.vx, &y1.vx],
+            [&y0.vy, &k3.vy, &k4.vy, &k5.vy, &k6.vy, &y1.vy],
+            [&y0.vz, &k3.vz, &k4.vz, &k5.vz, &k6.vz, &y1.vz],
+        ],
+        [
+            [&y0.ax, &k3.ax, &k4.ax, &k5.ax, &k6.ax, &y1.ax],
+            [&y0.ay, &k3.ay, &k4.ay, &k5.ay, &k6.ay, &y1.ay],
+            [&y0.az, &k3.az, &k4.az, &k5.az, &k6.az, &y1.az],
+        ],
+        &h,
+    );
     let accepted = judge::<N, FMA>(control, &err2) & !underflow;
     y1.keep(!accepted, y0);
     Attempts {

@@ -18,7 +18,7 @@
 // arrays is the form the compiler vectorizes.
 #![allow(clippy::needless_range_loop)]
 
-use super::super::adaptive::{error_term, judge, keep, prepare};
+use super::super::adaptive::{error_norm2, judge, keep, prepare};
 use super::super::driver::Kernel;
 use super::super::field::LaneField;
 use super::super::job::RayJob;
@@ -463,43 +463,19 @@ fn dopri5<F: LaneField, const N: usize, const P: usize, const FMA: bool>(
     run_stages::<N, P, FMA>(field, &h, DOPRI5_ROWS, y0, stages, y1);
     let [_, k3, k4, k5, k6] = &*stages;
     // The error estimate, on the values only.
-    let mut e = [[0.0; N]; 6];
-    let [ex, ey, ez, evx, evy, evz] = &mut e;
-    error_term(
-        [&y0.vx.v, &k3.vx.v, &k4.vx.v, &k5.vx.v, &k6.vx.v, &y1.vx.v],
+    let err2 = error_norm2(
+        [
+            [&y0.vx.v, &k3.vx.v, &k4.vx.v, &k5.vx.v, &k6.vx.v, &y1.vx.v],
+            [&y0.vy.v, &k3.vy.v, &k4.vy.v, &k5.vy.v, &k6.vy.v, &y1.vy.v],
+            [&y0.vz.v, &k3.vz.v, &k4.vz.v, &k5.vz.v, &k6.vz.v, &y1.vz.v],
+        ],
+        [
+            [&y0.ax.v, &k3.ax.v, &k4.ax.v, &k5.ax.v, &k6.ax.v, &y1.ax.v],
+            [&y0.ay.v, &k3.ay.v, &k4.ay.v, &k5.ay.v, &k6.ay.v, &y1.ay.v],
+            [&y0.az.v, &k3.az.v, &k4.az.v, &k5.az.v, &k6.az.v, &y1.az.v],
+        ],
         &h,
-        ex,
     );
-    error_term(
-        [&y0.vy.v, &k3.vy.v, &k4.vy.v, &k5.vy.v, &k6.vy.v, &y1.vy.v],
-        &h,
-        ey,
-    );
-    error_term(
-        [&y0.vz.v, &k3.vz.v, &k4.vz.v, &k5.vz.v, &k6.vz.v, &y1.vz.v],
-        &h,
-        ez,
-    );
-    error_term(
-        [&y0.ax.v, &k3.ax.v, &k4.ax.v, &k5.ax.v, &k6.ax.v, &y1.ax.v],
-        &h,
-        evx,
-    );
-    error_term(
-        [&y0.ay.v, &k3.ay.v, &k4.ay.v, &k5.ay.v, &k6.ay.v, &y1.ay.v],
-        &h,
-        evy,
-    );
-    error_term(
-        [&y0.az.v, &k3.az.v, &k4.az.v, &k5.az.v, &k6.az.v, &y1.az.v],
-        &h,
-        evz,
-    );
-    let mut err2 = [0.0; N];
-    for i in 0..N {
-        err2[i] = (ex[i] * ex[i] + ey[i] * ey[i] + ez[i] * ez[i])
-            + (evx[i] * evx[i] + evy[i] * evy[i] + evz[i] * evz[i]);
-    }
     let accepted = judge::<N, FMA>(control, &err2) & !underflow;
     y1.keep(!accepted, y0);
     Attempts {
