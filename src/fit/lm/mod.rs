@@ -9,7 +9,7 @@
 //! # Algorithm
 //!
 //! One argmin iteration evaluates at most one trial point (none when the
-//! step is exactly zero):
+//! step is exactly zero or already within xtol, see Termination):
 //!
 //! 1. **Scaling** (Moré 1978). `D = diag(d)` with `dⱼ` the running maximum of
 //!    the Euclidean norms of column `j` of `J` over all accepted points
@@ -60,11 +60,16 @@
 //! | [`ZeroResidual`](LmStop::ZeroResidual) | `F(x) == 0` exactly |
 //! | [`Gtol`](LmStop::Gtol) | `maxⱼ |pgⱼ| / (‖Jⱼ‖·‖r‖) ≤ gtol`, `pg` the projected gradient (MINPACK's cosine test) |
 //! | [`Ftol`](LmStop::Ftol) | actual and predicted relative reductions of `F` both `≤ ftol`, `ρ ≤ 2` (MINPACK) |
-//! | [`Xtol`](LmStop::Xtol) | `‖D δ‖ ≤ xtol·(‖D x‖ + xtol)`, `δ` the step just tried (accepted or not) |
+//! | [`Xtol`](LmStop::Xtol) | `‖D δ‖ ≤ xtol·(‖D x‖ + xtol)`, `δ` the step just tried (accepted or not), or the step about to be tried when its predicted reduction is at most `F/2` (it is then not evaluated) |
 //! | [`StallDamping`](LmStop::StallDamping) | `μ > 1e20` |
 //! | [`StallRejections`](LmStop::StallRejections) | `max_rejections` consecutive rejected steps |
 //!
-//! The ftol and xtol tests also run after rejected steps, as in MINPACK:
+//! The xtol test also runs on each step before it is evaluated: a step that
+//! passes it, and that the Gauss–Newton model expects to lower `F` by at
+//! most half, could only move `x` by less than the tolerance and `F` by a
+//! fraction, so the run ends without the evaluation (MINPACK evaluates it
+//! first: one residual and one Jacobian more). The ftol and xtol tests also run after rejected steps, as
+//! in MINPACK:
 //! once no step can improve `F` at working precision, `μ` grows until the
 //! tried step passes one of them. They are skipped while the last evaluated
 //! trial residual was non-finite, so shrinking away from a non-finite region
@@ -724,6 +729,33 @@ where
         };
         let step_norm = cand.step.component_mul(&w.d).norm();
         let pred = cand.pred;
+
+        // A step already within xtol that the Gauss–Newton model expects to
+        // lower F by at most half could only move x by less than the
+        // tolerance and F by a fraction: stop without evaluating it. (MINPACK
+        // evaluates it first; here that costs a trace of every ray, and its
+        // Jacobian when accepted. A step predicted to do more is taken: near a
+        // zero-residual answer a step below xtol can still lower F a
+        // thousandfold.)
+        if self.xtol > 0.0
+            && w.last_trial_finite
+            && pred <= 0.5 * cost
+            && step_norm <= self.xtol * (x.component_mul(&w.d).norm() + self.xtol)
+        {
+            let kv = argmin::kv!(
+                "mu" => mu_used;
+                "rho" => 0.0;
+                "step_norm" => step_norm;
+                "accepted" => false;
+                "cost_trial" => cost;
+                "pred" => pred;
+                "gnorm" => w.gnorm;
+                "n_fixed" => (x.len() - w.free.len()) as u64;
+                "rejections" => w.rejections;
+            );
+            self.work = Some(w);
+            return Ok((state.terminate_with(LmStop::Xtol.into()), Some(kv)));
+        }
 
         // A zero step (everything held or resolved below rounding) would only
         // re-evaluate r(x); skip the call and let the tests below end the run.
