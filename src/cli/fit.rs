@@ -239,6 +239,17 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
         sv.jacobian_evaluations,
         sv.wall_time_s
     );
+    if let Some(g) = &sv.surrogate {
+        let _ = writeln!(
+            s,
+            "  converged first under the surrogate tracer {} ({:.1}× cheaper at the start): {} of those iterations, with {} residual + {} Jacobian evaluations of its own",
+            g.tracer,
+            g.problem_rhs_at_start as f64 / g.surrogate_rhs_at_start.max(1) as f64,
+            g.iterations,
+            g.residual_evaluations,
+            g.jacobian_evaluations
+        );
+    }
     let _ = writeln!(s, "stopped: {}", sv.stop_reason);
     let _ = writeln!(
         s,

@@ -1,7 +1,8 @@
 //! Fitting the free parameters to the point pairs: the residual map with exact
 //! Jacobians ([`objective`]), Levenberg–Marquardt and Nelder–Mead as argmin
 //! solvers ([`lm`], [`nelder_mead`]), the strategies that run them
-//! ([`solve`]), and what the pairs cannot determine ([`identify`]).
+//! ([`solve`]), a cheaper tracer to converge under first ([`surrogate`]), and
+//! what the pairs cannot determine ([`identify`]).
 
 pub mod grow;
 pub mod history;
@@ -11,6 +12,7 @@ pub mod nelder_mead;
 pub mod objective;
 pub mod report;
 pub mod solve;
+pub mod surrogate;
 pub mod synthetic;
 
 pub use history::{History, IterationRecord, RunHistory};
@@ -19,7 +21,7 @@ use crate::error::Result;
 use crate::evaluate::trace_pairs;
 use crate::problem::Problem;
 use objective::Objective;
-use report::{FitReport, ParamReport, RunReport, SolverReport};
+use report::{FitReport, ParamReport, RunReport, SolverReport, SurrogateReport};
 use solve::IterateHook;
 use std::time::Instant;
 
@@ -45,8 +47,10 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
     let started = Instant::now();
     let objective = Objective::from_problem(problem);
     let settings = &problem.solver;
-    let solution = solve::solve(
+    let surrogate = surrogate::choose(&objective, settings, objective.start().as_slice());
+    let solution = solve::solve_with_surrogate(
         &objective,
+        surrogate.as_ref(),
         settings,
         &problem.bounds,
         settings.target_objective,
@@ -98,6 +102,24 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
             residual_evaluations: residuals,
             jacobian_evaluations: jacobians,
             rhs_evaluations: rhs,
+            surrogate: surrogate.as_ref().map(|s| {
+                let (residual_evaluations, jacobian_evaluations, rhs_evaluations) =
+                    s.objective.counts();
+                SurrogateReport {
+                    tracer: s.describe(),
+                    problem_rhs_at_start: s.problem_rhs,
+                    surrogate_rhs_at_start: s.surrogate_rhs,
+                    iterations: solution
+                        .runs
+                        .iter()
+                        .filter(|r| r.surrogate)
+                        .map(|r| r.iterations)
+                        .sum(),
+                    residual_evaluations,
+                    jacobian_evaluations,
+                    rhs_evaluations,
+                }
+            }),
             wall_time_s,
             stop_reason: best.reason.clone(),
             converged: best.converged,
@@ -116,6 +138,7 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
                 iterations: r.iterations,
                 stop_reason: r.reason.clone(),
                 converged: r.converged,
+                surrogate: r.surrogate,
             })
             .collect(),
         history: History {

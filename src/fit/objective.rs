@@ -18,6 +18,7 @@ use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{DualSVec64, DualStruct};
 use rayon::prelude::*;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Parameters per dual pass: 8 partials cost about 4 plain traces.
@@ -45,6 +46,9 @@ pub struct PairFlags {
     pub unreachable: bool,
 }
 
+/// The last Jacobian computed: the point (bit for bit), residuals, Jacobian.
+type Memo = (Vec<f64>, DVector<f64>, DMatrix<f64>);
+
 /// The residual map of a problem.
 #[derive(Debug)]
 pub struct Objective {
@@ -56,16 +60,15 @@ pub struct Objective {
     residual_evaluations: AtomicU64,
     jacobian_evaluations: AtomicU64,
     rhs_evaluations: AtomicU64,
+    /// LM computes the Jacobian at every accepted point, the last one
+    /// included, and the fit's report needs it there again (standard errors,
+    /// identifiability): the memo serves the second request.
+    last_jacobian: Mutex<Option<Memo>>,
 }
 
 impl Clone for Objective {
     fn clone(&self) -> Self {
-        Objective::new(
-            self.template.clone(),
-            self.free.clone(),
-            self.pairs.clone(),
-            self.options,
-        )
+        self.with_options(self.options)
     }
 }
 
@@ -86,7 +89,19 @@ impl Objective {
             residual_evaluations: AtomicU64::new(0),
             jacobian_evaluations: AtomicU64::new(0),
             rhs_evaluations: AtomicU64::new(0),
+            last_jacobian: Mutex::new(None),
         }
+    }
+
+    /// The same residual map traced with other settings (a surrogate's
+    /// tracer, `crate::fit::surrogate`), with counts of its own.
+    pub fn with_options(&self, options: TraceOptions) -> Objective {
+        Objective::new(
+            self.template.clone(),
+            self.free.clone(),
+            self.pairs.clone(),
+            options,
+        )
     }
 
     /// The residual map of a problem file.
@@ -209,8 +224,26 @@ impl Objective {
     /// kinds (and any ray that does not end on its plane) by dual numbers
     /// through the scalar tracer ([`Objective::jacobian_dual`]); both
     /// differentiate the same discrete map and agree to rounding.
+    ///
+    /// A request at the point of the previous one (bit for bit) returns that
+    /// result again without tracing (and without counting an evaluation).
     pub fn jacobian(&self, x: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-        self.jacobian_by(x, true)
+        let same = |m: &Memo| {
+            m.0.len() == x.len() && m.0.iter().zip(x).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        if let Ok(memo) = self.last_jacobian.lock()
+            && let Some(m) = memo.as_ref().filter(|m| same(m))
+        {
+            return (m.1.clone(), m.2.clone());
+        }
+        let (r, jac) = self.jacobian_by(x, true);
+        // After Ctrl-C the rows are placeholders, to be discarded.
+        if !crate::interrupt::requested()
+            && let Ok(mut memo) = self.last_jacobian.lock()
+        {
+            *memo = Some((x.to_vec(), r.clone(), jac.clone()));
+        }
+        (r, jac)
     }
 
     /// [`Objective::jacobian`] on the dual-number path alone: the reference

@@ -43,6 +43,29 @@ pub struct RunReport {
     pub stop_reason: String,
     /// Whether the solver reports convergence.
     pub converged: bool,
+    /// Whether it ran on the surrogate tracer (`crate::fit::surrogate`): its
+    /// `objective` is that tracer's F.
+    pub surrogate: bool,
+}
+
+/// The surrogate stage of a fit (`crate::fit::surrogate`).
+#[derive(Clone, Debug, Serialize)]
+pub struct SurrogateReport {
+    /// The surrogate tracer, in words (`dopri5 tolerance 1e-9`).
+    pub tracer: String,
+    /// Right-hand-side evaluations of one trace of the pairs at the start by
+    /// the problem's tracer (estimated: RK4's 4 a step).
+    pub problem_rhs_at_start: u64,
+    /// The same by the surrogate tracer (counted).
+    pub surrogate_rhs_at_start: u64,
+    /// Iterations of the surrogate runs.
+    pub iterations: u64,
+    /// Residual evaluations under the surrogate tracer.
+    pub residual_evaluations: u64,
+    /// Jacobian evaluations under the surrogate tracer.
+    pub jacobian_evaluations: u64,
+    /// Right-hand-side evaluations under the surrogate tracer.
+    pub rhs_evaluations: u64,
 }
 
 /// The solver's account of the fit.
@@ -54,12 +77,18 @@ pub struct SolverReport {
     pub best_run: String,
     /// Iterations over all runs.
     pub iterations: u64,
-    /// Residual evaluations (each traces every pair).
+    /// Residual evaluations under the problem's tracer (each traces every
+    /// pair).
     pub residual_evaluations: u64,
-    /// Jacobian evaluations (each traces every pair with dual numbers).
+    /// Jacobian evaluations under the problem's tracer (each traces every
+    /// pair with its derivatives).
     pub jacobian_evaluations: u64,
-    /// Evaluations of the ray equation's right-hand side, over everything.
+    /// Evaluations of the ray equation's right-hand side under the problem's
+    /// tracer, over everything.
     pub rhs_evaluations: u64,
+    /// The surrogate stage, when the fit had one (its counts are apart from
+    /// the ones above).
+    pub surrogate: Option<SurrogateReport>,
     /// Wall time of the fit (seconds).
     pub wall_time_s: f64,
     /// Why the kept run stopped.

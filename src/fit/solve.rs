@@ -8,11 +8,16 @@
 //! of F, an LM iteration one residual and one Jacobian). LM runs do not stop at
 //! the target: an LM run that meets it goes on to converge, which costs a few
 //! iterations and leaves the polished answer.
+//!
+//! With a surrogate tracer ([`super::surrogate`]) the strategy runs on the
+//! surrogate objective first, and LM refines its answer under the problem's
+//! own tracer.
 
 use super::history::{IterationRecord, RunHistory};
 use super::lm::{LevenbergMarquardt, LmState};
 use super::nelder_mead::{NelderMead, NmStop};
 use super::objective::Objective;
+use super::surrogate::{REFINE_DAMPING, Surrogate};
 use crate::error::Error;
 use crate::math::SplitMix64;
 use crate::problem::{SolverMethod, SolverSettings};
@@ -23,6 +28,7 @@ use argmin::core::{
 };
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::cell::RefCell;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -49,6 +55,9 @@ pub struct Run {
     pub converged: bool,
     /// Its iterates.
     pub history: RunHistory,
+    /// Whether it ran on the surrogate objective ([`super::surrogate`]): its
+    /// F is another tracer's, so it is never the best run.
+    pub surrogate: bool,
 }
 
 /// Everything the solvers did.
@@ -65,14 +74,43 @@ pub struct Solution {
 }
 
 /// Adapter: the objective as argmin's residual operator with Jacobian.
-struct Residuals<'a>(&'a Objective);
+/// In [`LmMode::Refine`], while trials are being accepted, a residual
+/// request computes the Jacobian too (the tangent trace yields the residuals),
+/// and LM's request for the Jacobian at the accepted point is then served by
+/// the objective's memo. After a rejected trial the next one is traced
+/// plainly: at the floor of F, where trials are accepted or rejected by
+/// rounding, a Jacobian per trial would be wasted.
+struct Residuals<'a> {
+    objective: &'a Objective,
+    mode: LmMode,
+    /// The last trial point, and whether LM asked for its Jacobian (that is,
+    /// accepted it); `true` before the first.
+    last: RefCell<(Option<DVector<f64>>, bool)>,
+}
+
+impl<'a> Residuals<'a> {
+    fn new(objective: &'a Objective, mode: LmMode) -> Self {
+        Residuals {
+            objective,
+            mode,
+            last: RefCell::new((None, true)),
+        }
+    }
+}
 
 impl Operator for Residuals<'_> {
     type Param = DVector<f64>;
     type Output = DVector<f64>;
     fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
         crate::interrupt::check()?;
-        Ok(self.0.residuals(x.as_slice()).0)
+        let mut last = self.last.borrow_mut();
+        let speculate = self.mode == LmMode::Refine && last.1;
+        *last = (Some(x.clone()), false);
+        Ok(if speculate {
+            self.objective.jacobian(x.as_slice()).0
+        } else {
+            self.objective.residuals(x.as_slice()).0
+        })
     }
 }
 
@@ -81,8 +119,28 @@ impl Jacobian for Residuals<'_> {
     type Jacobian = DMatrix<f64>;
     fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
         crate::interrupt::check()?;
-        Ok(self.0.jacobian(x.as_slice()).1)
+        let mut last = self.last.borrow_mut();
+        if last.0.as_ref() == Some(x) {
+            last.1 = true;
+        }
+        Ok(self.objective.jacobian(x.as_slice()).1)
     }
+}
+
+/// How an LM run starts and what it evaluates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LmMode {
+    /// From a start that may be far from the answer: heavy initial damping
+    /// (τ = 0.1) against jumps into other minima; the Jacobian only at
+    /// accepted points.
+    Search,
+    /// From next to the answer (the surrogate's, [`super::surrogate`]):
+    /// light damping (τ = [`REFINE_DAMPING`]), and the Jacobian at each trial
+    /// point that follows an accepted one, since trials are then nearly
+    /// always accepted and the tangent trace that gives the Jacobian gives
+    /// the residuals with it (a separate residual trace would only repeat
+    /// that work).
+    Refine,
 }
 
 /// Box bounds as a smooth change of variables (the MINUIT transforms), so that
@@ -175,12 +233,16 @@ impl Recorder {
         }
     }
 
-    /// The finished run: its end point re-evaluated, and the recorded history.
+    /// The finished run and its recorded history. `known` is F at `end`
+    /// when the solver has it (LM's best cost, from the same residuals);
+    /// otherwise the end point is evaluated again.
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         objective: &Objective,
         x0: &[f64],
         end: Vec<f64>,
+        known: Option<f64>,
         iterations: u64,
         reason: String,
         converged: bool,
@@ -188,7 +250,9 @@ impl Recorder {
         Run {
             label: self.label.clone(),
             start: x0.to_vec(),
-            objective: objective.cost(&end),
+            objective: known
+                .filter(|f| f.is_finite())
+                .unwrap_or_else(|| objective.cost(&end)),
             end,
             iterations,
             reason,
@@ -197,6 +261,7 @@ impl Recorder {
                 label: self.label.clone(),
                 records: self.records.lock().map(|r| r.clone()).unwrap_or_default(),
             },
+            surrogate: false,
         }
     }
 }
@@ -264,10 +329,27 @@ pub fn run_lm(
     label: &str,
     hook: Option<IterateHook>,
 ) -> Result<Run, Error> {
+    run_lm_in(objective, settings, bounds, x0, label, hook, LmMode::Search)
+}
+
+/// One Levenberg–Marquardt run from `x0` in `mode`.
+pub fn run_lm_in(
+    objective: &Objective,
+    settings: &SolverSettings,
+    bounds: &[(f64, f64)],
+    x0: &[f64],
+    label: &str,
+    hook: Option<IterateHook>,
+    mode: LmMode,
+) -> Result<Run, Error> {
+    let damping = match mode {
+        LmMode::Search => INITIAL_DAMPING,
+        LmMode::Refine => REFINE_DAMPING,
+    };
     let lower = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.0));
     let upper = DVector::from_iterator(bounds.len(), bounds.iter().map(|b| b.1));
     let solver = LevenbergMarquardt::new()
-        .with_initial_damping(INITIAL_DAMPING)
+        .with_initial_damping(damping)
         .and_then(|s| s.with_ftol(settings.ftol))
         .and_then(|s| s.with_xtol(settings.xtol))
         .and_then(|s| s.with_gtol(settings.gtol))
@@ -275,7 +357,7 @@ pub fn run_lm(
         .map_err(|e| solver_error(label, e))?;
     let recorder = Recorder::new(label, None, hook);
     let start = DVector::from_column_slice(x0);
-    let result = Executor::new(Residuals(objective), solver)
+    let result = Executor::new(Residuals::new(objective, mode), solver)
         .configure(|s: LmState| s.param(start).max_iters(settings.max_iterations))
         .add_observer(recorder.clone(), ObserverMode::Always)
         .timer(false)
@@ -287,7 +369,18 @@ pub fn run_lm(
         .map(|p| p.as_slice().to_vec())
         .unwrap_or_else(|| x0.to_vec());
     let (reason, converged) = describe(state.get_termination_reason());
-    Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
+    // LM's best cost is ½|r|² of the residuals at `end`, as `Objective::cost`
+    // computes it: no need to trace the pairs again.
+    let known = state.get_best_param().map(|_| state.get_best_cost());
+    Ok(recorder.finish(
+        objective,
+        x0,
+        end,
+        known,
+        state.get_iter(),
+        reason,
+        converged,
+    ))
 }
 
 /// Nelder–Mead's iteration limit per `solver.max_iterations`.
@@ -356,7 +449,15 @@ pub fn run_nelder_mead(
         .get_termination_reason()
         .and_then(NmStop::from_reason)
         .is_some();
-    Ok(recorder.finish(objective, x0, end, state.get_iter(), reason, converged))
+    Ok(recorder.finish(
+        objective,
+        x0,
+        end,
+        None,
+        state.get_iter(),
+        reason,
+        converged,
+    ))
 }
 
 /// Deterministic starting points: uniform inside two-sided bounds, otherwise
@@ -397,6 +498,10 @@ pub fn starting_points(
 /// `settings.starts` further starting points in parallel; if the best is still
 /// above `target`, Nelder–Mead from it (stopping at `target`), then LM to
 /// polish. `nelder-mead` also stops at `target`. Every run is kept.
+///
+/// Every evaluation traces with the objective's own tracer; see
+/// [`solve_with_surrogate`] for a fit that converges under a cheaper one
+/// first.
 pub fn solve(
     objective: &Objective,
     settings: &SolverSettings,
@@ -404,16 +509,100 @@ pub fn solve(
     target: f64,
     hook: Option<IterateHook>,
 ) -> Result<Solution, Error> {
+    solve_with_surrogate(objective, None, settings, bounds, target, hook)
+}
+
+/// [`solve`], with a `surrogate` ([`super::surrogate`]): the strategy runs on
+/// the surrogate objective (its runs labelled `surrogate …`), then LM refines
+/// its best answer under the problem's own tracer (`lm (refine)`,
+/// [`LmMode::Refine`]). If the refined F misses `target` where the
+/// surrogate's met it, the strategy runs again on the problem's own objective
+/// from the start. Without a surrogate, exactly [`solve`].
+pub fn solve_with_surrogate(
+    objective: &Objective,
+    surrogate: Option<&Surrogate>,
+    settings: &SolverSettings,
+    bounds: &[(f64, f64)],
+    target: f64,
+    hook: Option<IterateHook>,
+) -> Result<Solution, Error> {
+    let runs = match surrogate {
+        None => strategy(objective, settings, bounds, target, hook, "")?,
+        Some(s) => {
+            let mut runs = strategy(
+                &s.objective,
+                settings,
+                bounds,
+                target,
+                hook.clone(),
+                SURROGATE_LABEL,
+            )?;
+            for r in &mut runs {
+                r.surrogate = true;
+            }
+            let best = best_of(&runs, |_| true);
+            let met = runs[best].objective <= target;
+            let from = runs[best].end.clone();
+            let refined = run_lm_in(
+                objective,
+                settings,
+                bounds,
+                &from,
+                REFINE_LABEL,
+                hook.clone(),
+                LmMode::Refine,
+            )?;
+            let missed = refined.objective > target;
+            runs.push(refined);
+            if missed && met {
+                runs.extend(strategy(objective, settings, bounds, target, hook, "")?);
+            }
+            runs
+        }
+    };
+    let best = best_run(&runs);
+    Ok(Solution {
+        x: runs[best].end.clone(),
+        objective: runs[best].objective,
+        best_run: best,
+        runs,
+    })
+}
+
+/// Label prefix of the runs on the surrogate objective.
+pub const SURROGATE_LABEL: &str = "surrogate ";
+
+/// Label of the LM run that refines the surrogate's answer.
+pub const REFINE_LABEL: &str = "lm (refine)";
+
+/// The runs of `settings.method`'s strategy ([`solve`]), labels prefixed by
+/// `prefix`.
+fn strategy(
+    objective: &Objective,
+    settings: &SolverSettings,
+    bounds: &[(f64, f64)],
+    target: f64,
+    hook: Option<IterateHook>,
+    prefix: &str,
+) -> Result<Vec<Run>, Error> {
     let x0 = objective.start().as_slice().to_vec();
+    let label = |l: &str| format!("{prefix}{l}");
     let mut runs = Vec::new();
     match settings.method {
-        SolverMethod::Lm => runs.push(run_lm(objective, settings, bounds, &x0, "lm", hook)?),
+        SolverMethod::Lm => runs.push(run_lm(
+            objective,
+            settings,
+            bounds,
+            &x0,
+            &label("lm"),
+            hook,
+        )?),
         SolverMethod::NelderMead => runs.push(run_nelder_mead(
             objective,
             settings,
             bounds,
             &x0,
-            "nelder-mead",
+            &label("nelder-mead"),
             target,
             hook,
         )?),
@@ -423,7 +612,7 @@ pub fn solve(
                 settings,
                 bounds,
                 &x0,
-                "lm",
+                &label("lm"),
                 hook.clone(),
             )?);
             if runs[0].objective > target && !x0.is_empty() {
@@ -437,7 +626,7 @@ pub fn solve(
                             settings,
                             bounds,
                             s,
-                            &format!("lm (start {})", k + 1),
+                            &label(&format!("lm (start {})", k + 1)),
                             hook.clone(),
                         )
                     })
@@ -453,7 +642,7 @@ pub fn solve(
                         settings,
                         bounds,
                         &from,
-                        "nelder-mead",
+                        &label("nelder-mead"),
                         target,
                         hook.clone(),
                     )?;
@@ -464,32 +653,37 @@ pub fn solve(
                         settings,
                         bounds,
                         &polish_from,
-                        "lm (polish)",
+                        &label("lm (polish)"),
                         hook,
                     )?);
                 }
             }
         }
     }
-    let best = best_run(&runs);
-    Ok(Solution {
-        x: runs[best].end.clone(),
-        objective: runs[best].objective,
-        best_run: best,
-        runs,
-    })
+    Ok(runs)
 }
 
-/// The run with the lowest objective; the earliest wins ties, so the choice does
-/// not depend on thread timing.
+/// The run with the lowest objective among those on the problem's own
+/// tracer (all of them when none is); the earliest wins ties, so the choice
+/// does not depend on thread timing.
 fn best_run(runs: &[Run]) -> usize {
-    let mut best = 0;
+    if runs.iter().any(|r| !r.surrogate) {
+        best_of(runs, |r| !r.surrogate)
+    } else {
+        best_of(runs, |_| true)
+    }
+}
+
+/// The earliest run of lowest objective among those `eligible` keeps (0 if
+/// none).
+fn best_of(runs: &[Run], eligible: impl Fn(&Run) -> bool) -> usize {
+    let mut best: Option<usize> = None;
     for (i, r) in runs.iter().enumerate() {
-        if r.objective < runs[best].objective {
-            best = i;
+        if eligible(r) && best.is_none_or(|b| r.objective < runs[b].objective) {
+            best = Some(i);
         }
     }
-    best
+    best.unwrap_or(0)
 }
 
 #[cfg(test)]

@@ -54,6 +54,10 @@ pub struct SolverSpec {
     /// Most terms growing may add (default [`DEFAULT_MAX_TERMS`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_terms: Option<usize>,
+    /// Whether LM may first converge under a cheaper tracer and then finish
+    /// under the problem's own (`crate::fit::surrogate`); default `true`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surrogate: Option<bool>,
 }
 
 fn default_solver() -> String {
@@ -76,6 +80,7 @@ impl Default for SolverSpec {
             grow: None,
             noise: None,
             max_terms: None,
+            surrogate: None,
         }
     }
 }
@@ -136,6 +141,9 @@ pub struct SolverSettings {
     pub simplex_ftol: f64,
     /// Grow the model instead of fitting it as is (`crate::fit::grow`).
     pub grow: Option<GrowSettings>,
+    /// Whether LM may converge under a cheaper tracer first and then finish
+    /// under the problem's own, when that is cheaper (`crate::fit::surrogate`).
+    pub surrogate: bool,
 }
 
 /// Validated settings of `mirage fit --grow` (`solver.grow`).
@@ -284,5 +292,6 @@ pub fn solver_settings(spec: &SolverSpec, path: &Path) -> Result<SolverSettings>
         simplex_xtol: tol("simplex_xtol", spec.simplex_xtol, DEFAULT_SIMPLEX_XTOL)?,
         simplex_ftol: tol("simplex_ftol", spec.simplex_ftol, DEFAULT_SIMPLEX_FTOL)?,
         grow: grow_settings(spec, method, path)?,
+        surrogate: spec.surrogate.unwrap_or(true),
     })
 }
