@@ -1,5 +1,8 @@
-//! Fit time of every bundled problem, and of a 15-pair, 4-parameter hot-spot fit
-//! (the target: under 0.2 s on one core). Run with `cargo bench --bench fit`;
+//! Fit time of every bundled problem, of a 15-pair, 4-parameter hot-spot fit
+//! (the target: under 0.2 s on one core), and of the 36-pair, 6-parameter
+//! sweep problem at 0.5 m RK4 steps with the surrogate tracer and without it
+//! (issue #14's target: under 0.3 s on one core; the ratio of the two is
+//! what the surrogate buys, measured in one run). Run with `cargo bench --bench fit`;
 //! pin to one core with `RAYON_NUM_THREADS=1`. With `MIRAGE_BENCH_TABLE_ONLY=1`
 //! it prints the README's table instead (median of 7 fits each, as
 //! `benches/tables.sh` runs it).
@@ -48,6 +51,25 @@ fn fifteen_pair_problem() -> Problem {
     p
 }
 
+/// `benches/baseline/problems/sweep-36x6-rk4.json` (36 pairs over 2.5 km, 6
+/// free parameters, RK4 at 0.5 m), the surrogate tracer on or off.
+fn rk4_sweep(surrogate: bool) -> Problem {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/baseline/problems/sweep-36x6-rk4.json");
+    let mut p = Problem::load(&path).unwrap();
+    p.solver.surrogate = surrogate;
+    p.name = format!(
+        "{}, {}",
+        p.name,
+        if surrogate {
+            "surrogate"
+        } else {
+            "no surrogate"
+        }
+    );
+    p
+}
+
 /// Every bundled problem (`problems/*.json`; `problems/scenes/` holds scenes).
 fn bundled() -> Vec<Problem> {
     let mut files: Vec<_> = std::fs::read_dir(problems_dir())
@@ -75,6 +97,10 @@ fn bench_fits(c: &mut Criterion) {
             r
         })
     });
+    for surrogate in [true, false] {
+        let p = rk4_sweep(surrogate);
+        group.bench_function(p.name.clone(), |b| b.iter(|| fit(&p, None).unwrap()));
+    }
     group.finish();
 }
 
@@ -89,6 +115,9 @@ fn table() {
     println!("| --- | --- | --- | --- | --- | --- |");
     let mut all = bundled();
     all.push(fifteen_pair_problem());
+    all.push(rk4_sweep(true));
+    all.push(rk4_sweep(false));
+    let mut sweep = Vec::new();
     for p in all {
         let r = fit(&p, None).unwrap();
         let mut times: Vec<f64> = (0..7)
@@ -114,6 +143,15 @@ fn table() {
             },
             r.totals.objective,
             times[3] * 1e3
+        );
+        if p.name.starts_with("sweep-36x6-rk4") {
+            sweep.push(times[3]);
+        }
+    }
+    if let [with, without] = sweep[..] {
+        println!(
+            "\nThe surrogate tracer on sweep-36x6-rk4: {:.1}× faster than RK4 alone, same run.",
+            without / with
         );
     }
 }
