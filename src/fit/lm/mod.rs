@@ -232,6 +232,34 @@ struct Decomp {
     cutoff: f64,
 }
 
+/// What one iteration tried, as its [`KV`] reports it.
+struct Trial {
+    mu: f64,
+    rho: f64,
+    step_norm: f64,
+    accepted: bool,
+    cost_trial: f64,
+    pred: f64,
+}
+
+impl Trial {
+    /// The iteration's key-value record (see "Bookkeeping" above), with the
+    /// working data `w` after the iteration and `n` parameters.
+    fn kv(self, w: &Work, n: usize) -> KV {
+        argmin::kv!(
+            "mu" => self.mu;
+            "rho" => self.rho;
+            "step_norm" => self.step_norm;
+            "accepted" => self.accepted;
+            "cost_trial" => self.cost_trial;
+            "pred" => self.pred;
+            "gnorm" => w.gnorm;
+            "n_fixed" => (n - w.free.len()) as u64;
+            "rejections" => w.rejections;
+        )
+    }
+}
+
 /// A candidate trial point together with its model quantities.
 struct Candidate {
     x_trial: DVector<f64>,
@@ -742,17 +770,15 @@ where
             && pred <= 0.5 * cost
             && step_norm <= self.xtol * (x.component_mul(&w.d).norm() + self.xtol)
         {
-            let kv = argmin::kv!(
-                "mu" => mu_used;
-                "rho" => 0.0;
-                "step_norm" => step_norm;
-                "accepted" => false;
-                "cost_trial" => cost;
-                "pred" => pred;
-                "gnorm" => w.gnorm;
-                "n_fixed" => (x.len() - w.free.len()) as u64;
-                "rejections" => w.rejections;
-            );
+            let kv = Trial {
+                mu: mu_used,
+                rho: 0.0,
+                step_norm,
+                accepted: false,
+                cost_trial: cost,
+                pred,
+            }
+            .kv(&w, x.len());
             self.work = Some(w);
             return Ok((state.terminate_with(LmStop::Xtol.into()), Some(kv)));
         }
@@ -874,17 +900,15 @@ where
             None
         };
 
-        let kv = argmin::kv!(
-            "mu" => mu_used;
-            "rho" => rho;
-            "step_norm" => step_norm;
-            "accepted" => accepted;
-            "cost_trial" => cost_trial;
-            "pred" => pred;
-            "gnorm" => w.gnorm;
-            "n_fixed" => (x.len() - w.free.len()) as u64;
-            "rejections" => w.rejections;
-        );
+        let kv = Trial {
+            mu: mu_used,
+            rho,
+            step_norm,
+            accepted,
+            cost_trial,
+            pred,
+        }
+        .kv(&w, x.len());
         self.work = Some(w);
         let state = match reason {
             Some(stop) => state.terminate_with(stop.into()),
