@@ -257,3 +257,65 @@ fn a_thin_pole_is_never_missed() {
         }
     }
 }
+
+/// A point on the circle of curvature `kappa` (0: the line) from `p` along
+/// the unit `t`, bending toward the unit `n` ⊥ t, after arc `s`.
+fn on_arc(p: DVec3, t: DVec3, n: DVec3, kappa: f64, s: f64) -> DVec3 {
+    if kappa == 0.0 {
+        p + t * s
+    } else {
+        p + t * ((kappa * s).sin() / kappa) + n * ((1.0 - (kappa * s).cos()) / kappa)
+    }
+}
+
+/// The free arc a grid probe gives (its unbounding spheres and clear boxes,
+/// from inside and outside the grid) is free: no point of a ray bending at
+/// most κ, in any direction, lies inside an object over that arc.
+#[test]
+fn free_arcs_of_the_grid_are_free() {
+    let objs = objects();
+    let grid = SceneDistance::Grid(Box::new(Grid::build(&objs, f64::NEG_INFINITY).unwrap()));
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut counters = Default::default();
+    let (mut long, mut total) = (0, 0);
+    for k in 0..3000 {
+        // Points in and around the objects' box (x ±15, y −2…14, z 40…140).
+        let p = DVec3::new(
+            -15.0 + 30.0 * next(),
+            -2.0 + 16.0 * next(),
+            40.0 + 100.0 * next(),
+        );
+        let t = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+        let n = t.any_orthonormal_vector();
+        let n = (n * (next() - 0.5) + t.cross(n) * (next() - 0.5)).normalize();
+        let kappa = [0.0, 1e-4, 1e-2][k % 3];
+        let (q, arc) = grid.probe(p, t, kappa, &mut counters);
+        if q.radius <= 0.0 {
+            continue;
+        }
+        let arc = arc.min(400.0);
+        total += 1;
+        if arc > 2.0 * q.radius {
+            long += 1;
+        }
+        for i in 0..=4000 {
+            let x = on_arc(p, t, n, kappa, arc * i as f64 / 4000.0);
+            let (d, _) = mirage::scene::sdf::nearest_object(&objs, x);
+            assert!(
+                d > -1e-9,
+                "point {i}/4000 of the free arc {arc} from {p} along {t} (κ {kappa}) is inside: {d}"
+            );
+        }
+    }
+    // The boxes do reach beyond the spheres (else this tests little).
+    assert!(
+        long * 4 > total,
+        "{long} of {total} arcs beyond twice the radius"
+    );
+}

@@ -14,12 +14,21 @@
 //! - the **near list**: the objects that may be nearest somewhere in the cell,
 //!   and one bound `far` on the distance to all the others from anywhere in the
 //!   cell. Near a surface the distance is `min(far, min over the near list)`:
-//!   exact where it matters, and never more than the true distance.
+//!   exact where it matters, and never more than the true distance;
+//! - for a cell its sphere covers (no solid in it), a **clear box** of such
+//!   cells around it ([`super::clear`]): a ray runs down a corridor of open
+//!   air to the box's end in one step, where the sphere would stop it after
+//!   the corridor's half-width. On the road scene this halved the distance
+//!   queries (68 → 27 a pixel).
+//!
+//! From outside the grid's box a ray may travel, in one step, as long as it
+//! surely stays outside one of the box's slabs, bending included.
 //!
 //! Correctness rests on every object's SDF being a 1-Lipschitz lower bound of
 //! the true distance ([`crate::scene::sdf`]): from a bound d at c, no surface
 //! lies closer than `d − |p − c|` to p.
 
+use super::clear::ClearBoxes;
 use crate::scene::sdf::SceneObject;
 use glam::{DVec2, DVec3};
 
@@ -264,6 +273,8 @@ pub struct Grid {
     near: Vec<u32>,
     /// Below this free radius a query evaluates the near list.
     cheap_min: f64,
+    /// Boxes of clear cells, for long steps through open air.
+    clear: ClearBoxes,
 }
 
 /// Largest number of cells of a grid.
@@ -344,6 +355,12 @@ impl Grid {
                 (empty, far, near)
             })
             .collect();
+        // A cell its unbounding sphere covers holds no solid.
+        let clear: Vec<bool> = per_cell
+            .iter()
+            .map(|&(empty, _, _)| empty > half_diag * (1.0 + 1e-9))
+            .collect();
+        let clear = ClearBoxes::new(dims, bounds.min, cell, &clear);
         let mut cells = Vec::with_capacity(n);
         let mut near = Vec::new();
         for (empty, far, list) in per_cell {
@@ -365,6 +382,7 @@ impl Grid {
             cells,
             near,
             cheap_min: 0.25 * cell.min_element(),
+            clear,
         })
     }
 
@@ -378,16 +396,21 @@ impl Grid {
         self.bounds
     }
 
-    /// The cell holding (or nearest to) `p`, with its centre.
+    /// The cell holding (or nearest to) `p`, with its centre, its (i, j, k)
+    /// and its index.
     #[inline]
-    fn cell_of(&self, p: DVec3) -> (&Cell, DVec3) {
+    fn cell_of(&self, p: DVec3) -> (&Cell, DVec3, [usize; 3], usize) {
         let q = (p - self.bounds.min) / self.cell;
-        let i = (q.x.floor().max(0.0) as usize).min(self.dims[0] - 1);
-        let j = (q.y.floor().max(0.0) as usize).min(self.dims[1] - 1);
-        let k = (q.z.floor().max(0.0) as usize).min(self.dims[2] - 1);
+        // `as usize` truncates and sends negatives and NaN to 0: the floor
+        // for every input, without a libm call (x86-64's baseline has no
+        // rounding instruction).
+        let i = (q.x as usize).min(self.dims[0] - 1);
+        let j = (q.y as usize).min(self.dims[1] - 1);
+        let k = (q.z as usize).min(self.dims[2] - 1);
         let c = self.bounds.min
             + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
-        (&self.cells[i + self.dims[0] * (j + self.dims[1] * k)], c)
+        let idx = i + self.dims[0] * (j + self.dims[1] * k);
+        (&self.cells[idx], c, [i, j, k], idx)
     }
 
     #[inline]
@@ -417,13 +440,14 @@ impl Grid {
             return (Query { radius, object }, 0.0);
         }
         let outside = self.bounds.distance(p);
-        let (cell, c) = self.cell_of(p);
+        let (cell, c, ijk, idx) = self.cell_of(p);
         let arc = match ray {
             Some((t, kappa)) if t.is_finite() => {
                 if outside > 0.0 {
                     self.box_arc(p, t, kappa)
                 } else {
                     sphere_arc(p, t, kappa, c, cell.empty)
+                        .max(self.clear.arc(ijk, idx, p, t, kappa))
                 }
             }
             _ => 0.0,
@@ -465,23 +489,37 @@ impl Grid {
         (best, arc)
     }
 
-    /// From outside the grid: the arc along the tangent before the ray can
-    /// enter the box (grown by how far a curve bending at most `kappa` strays
-    /// from its tangent over that arc).
+    /// From outside the grid: an arc over which a ray with unit tangent `t`,
+    /// bending at most `kappa`, surely stays outside the box. Along an arc s
+    /// each coordinate is within κs²/2 of the tangent's, so a ray at distance
+    /// d outside a face, moving away from it at rate a, stays outside while
+    /// d + a·s − κs²/2 > 0; staying outside one slab is enough.
     fn box_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
-        // Any point of the box is within `reach` of p; along an arc no longer
-        // than that the curve stays within `m` of its tangent line.
-        let centre = 0.5 * (self.bounds.min + self.bounds.max);
-        let reach = (p - centre).length() + 0.5 * (self.bounds.max - self.bounds.min).length();
-        let m = 0.5 * kappa * reach * reach;
-        let grown = Aabb {
-            min: self.bounds.min - DVec3::splat(m),
-            max: self.bounds.max + DVec3::splat(m),
-        };
-        match grown.ray_interval(p, t) {
-            None => reach,
-            Some((t0, _)) => t0.min(reach),
+        let mut best = 0.0f64;
+        for k in 0..3 {
+            let (d, away) = if p[k] > self.bounds.max[k] {
+                (p[k] - self.bounds.max[k], t[k])
+            } else if p[k] < self.bounds.min[k] {
+                (self.bounds.min[k] - p[k], -t[k])
+            } else {
+                continue;
+            };
+            let r = (away * away + 2.0 * kappa * d).sqrt();
+            // The positive root, in the form without cancellation.
+            let s = if away <= 0.0 {
+                if r - away > 0.0 {
+                    2.0 * d / (r - away)
+                } else {
+                    f64::INFINITY
+                }
+            } else if kappa > 0.0 {
+                (r + away) / kappa
+            } else {
+                f64::INFINITY
+            };
+            best = best.max(s);
         }
+        best
     }
 
     /// Largest distance a cell's centre may be from a point of the cell.

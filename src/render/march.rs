@@ -20,8 +20,9 @@
 //!   previous point, takes the plain step, and stays plain (ω = 1);
 //! - **quadric**: the grid of unbounding spheres ([`super::accel::Grid`]): far
 //!   from surfaces a query costs no SDF evaluation and the step runs to where
-//!   the ray leaves the cell's empty sphere; near surfaces the cell's short
-//!   object list is evaluated; over-relaxed as in *enhanced*.
+//!   the ray leaves the cell's empty sphere or its clear box
+//!   ([`super::clear`]), whichever reaches further; near surfaces the cell's
+//!   short object list is evaluated; over-relaxed as in *enhanced*.
 //!
 //! The ground (y = 0, or the sphere of the round earth, [`Air::earth`]) is not
 //! an SDF (a plane would throttle every grazing ray to steps of its height):

@@ -24,6 +24,7 @@
 pub mod accel;
 pub mod air;
 pub mod camera;
+pub mod clear;
 pub mod dispersion;
 pub mod glare;
 pub mod march;
