@@ -319,3 +319,54 @@ fn free_arcs_of_the_grid_are_free() {
         "{long} of {total} arcs beyond twice the radius"
     );
 }
+
+/// Shadow rays through the objects seen along the sun give what marching
+/// every object gives.
+#[test]
+fn sun_columns_agree_with_marching_every_object() {
+    use mirage::render::shadow::SunColumns;
+    let objs = objects();
+    let sun = DVec3::new(0.3, 0.5, -0.6).normalize();
+    let columns = SunColumns::new(&objs, sun).unwrap();
+    let brute = |p: DVec3| -> bool {
+        let mut t = 0.0;
+        for _ in 0..100_000 {
+            let (d, _) = mirage::scene::sdf::nearest_object(&objs, p + sun * t);
+            if d < 1e-4 + 1e-7 * t {
+                return false;
+            }
+            t += d;
+            if t > 1000.0 {
+                return true;
+            }
+        }
+        true
+    };
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut counters = Default::default();
+    let (mut shadowed, mut skipped) = (0, 0);
+    for _ in 0..20_000 {
+        // Ground points under and behind the objects.
+        let p = DVec3::new(-20.0 + 40.0 * next(), 0.0, 40.0 + 120.0 * next());
+        if nearest_distance(&objs, p) < 1e-3 {
+            continue;
+        }
+        let before = counters;
+        let lit = columns.sunlit(&objs, p, &mut counters);
+        assert_eq!(lit, brute(p), "at {p}");
+        shadowed += usize::from(!lit);
+        skipped += usize::from(counters == before);
+    }
+    assert!(shadowed > 500, "only {shadowed} points in shadow");
+    assert!(skipped > 5000, "only {skipped} points without a query");
+}
+
+fn nearest_distance(objs: &[SceneObject], p: DVec3) -> f64 {
+    mirage::scene::sdf::nearest_object(objs, p).0
+}
