@@ -118,7 +118,8 @@ impl Profile {
 
     /// A lower bound of δ over [y, ∞) (y ≥ 0).
     fn min_above(&self, y: f64) -> f64 {
-        let i = ((y / self.dy).floor() as usize).min(self.delta.len() - 1);
+        // `as usize` is the floor here (negatives give 0), without libm.
+        let i = ((y / self.dy) as usize).min(self.delta.len() - 1);
         self.suffix_min[i] - self.margin
     }
 
@@ -131,7 +132,8 @@ impl Profile {
     /// Whether some tabulated height in [0, y] has δ < `c1` exactly (then a
     /// descending ray with `n·cos = 1 + c1` turns before reaching it).
     fn dips_below(&self, y: f64, c1: f64) -> bool {
-        let i = ((y / self.dy).floor() as usize).min(self.delta.len() - 1);
+        // `as usize` is the floor here (negatives give 0), without libm.
+        let i = ((y / self.dy) as usize).min(self.delta.len() - 1);
         self.prefix_min[i] < c1
     }
 

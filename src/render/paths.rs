@@ -85,7 +85,8 @@ impl TablePath {
     #[inline]
     fn at(&self, tau: f64, h: f64) -> (f64, f64) {
         let q = tau / h;
-        let i = q.floor().max(0.0) as usize;
+        // The floor (negatives and NaN give 0) without a libm call.
+        let i = q as usize;
         let d = self.interval(i, h);
         hermite(d, q - i as f64, h)
     }
