@@ -33,9 +33,9 @@
 //! A ray at `p` with unit tangent `t` and curvature at most κ strays from its
 //! tangent line by at most κs²/2 over an arc s, in any coordinate as well: it
 //! cannot reach a face at distance d along an axis before the root of
-//! κs²/2 + t_k·s = d ([`exit`]). The least such root over the six faces is a
-//! free arc (capped at the grid's diagonal); the sphere tracer takes the
-//! larger of it and the sphere's.
+//! κs²/2 + t_k·s = d (the function `exit`). The least such root over the
+//! six faces is a free arc (capped at the grid's diagonal); the sphere tracer
+//! takes the larger of it and the sphere's.
 
 use glam::DVec3;
 use std::sync::OnceLock;
