@@ -28,7 +28,7 @@
 //! the true distance ([`crate::scene::sdf`]): from a bound d at c, no surface
 //! lies closer than `d − |p − c|` to p.
 
-use super::clear::ClearBoxes;
+use super::clear::{ClearBoxes, face_root};
 use crate::scene::sdf::SceneObject;
 use glam::{DVec2, DVec3};
 
@@ -490,34 +490,22 @@ impl Grid {
     }
 
     /// From outside the grid: an arc over which a ray with unit tangent `t`,
-    /// bending at most `kappa`, surely stays outside the box. Along an arc s
-    /// each coordinate is within κs²/2 of the tangent's, so a ray at distance
-    /// d outside a face, moving away from it at rate a, stays outside while
-    /// d + a·s − κs²/2 > 0; staying outside one slab is enough.
+    /// bending at most `kappa`, surely stays outside the box: staying outside
+    /// one of its slabs is enough, and a ray at distance d outside a face
+    /// cannot cross it before [`face_root`] of d.
     fn box_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
         let mut best = 0.0f64;
         for k in 0..3 {
-            let (d, away) = if p[k] > self.bounds.max[k] {
-                (p[k] - self.bounds.max[k], t[k])
+            // The distance d outside a face, and the rate toward it.
+            let (d, toward) = if p[k] > self.bounds.max[k] {
+                (p[k] - self.bounds.max[k], -t[k])
             } else if p[k] < self.bounds.min[k] {
-                (self.bounds.min[k] - p[k], -t[k])
+                (self.bounds.min[k] - p[k], t[k])
             } else {
                 continue;
             };
-            let r = (away * away + 2.0 * kappa * d).sqrt();
-            // The positive root, in the form without cancellation.
-            let s = if away <= 0.0 {
-                if r - away > 0.0 {
-                    2.0 * d / (r - away)
-                } else {
-                    f64::INFINITY
-                }
-            } else if kappa > 0.0 {
-                (r + away) / kappa
-            } else {
-                f64::INFINITY
-            };
-            best = best.max(s);
+            // The slab is reached no sooner than d is crossed.
+            best = best.max(face_root(d, toward, kappa));
         }
         best
     }

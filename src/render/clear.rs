@@ -44,7 +44,7 @@ use std::sync::OnceLock;
 const CUBIC_ROUNDS: usize = 4;
 
 /// The clear boxes of a grid (see the module documentation).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ClearBoxes {
     dims: [usize; 3],
     /// Summed-volume table of the cells that are not clear, (dims + 1)³.
@@ -60,27 +60,6 @@ pub struct ClearBoxes {
     /// Longest free arc considered (the grid's diagonal): caps the curvature
     /// margin of boxes open to infinity.
     reach: f64,
-}
-
-impl Clone for ClearBoxes {
-    fn clone(&self) -> Self {
-        ClearBoxes {
-            dims: self.dims,
-            blocked: self.blocked.clone(),
-            boxes: self
-                .boxes
-                .iter()
-                .map(|b| match b.get() {
-                    Some(v) => OnceLock::from(*v),
-                    None => OnceLock::new(),
-                })
-                .collect(),
-            axes: self.axes,
-            origin: self.origin,
-            cell: self.cell,
-            reach: self.reach,
-        }
-    }
 }
 
 impl ClearBoxes {
@@ -236,13 +215,8 @@ impl ClearBoxes {
 }
 
 /// The arc length a curve from `p` with unit tangent `t`, bending at most
-/// `kappa`, surely stays in the box `lo .. hi` (0 if `p` is not inside it).
-///
-/// Per axis and face: along an arc s the curve's coordinate is within
-/// κs²/2 of the tangent's, `p_k + s·t_k`, so it cannot reach the face at
-/// distance d before the root of κs²/2 + t_k·s = d, computed in the form
-/// 2d / (t_k + √(t_k² + 2κd)) that stays accurate as κ → 0 (where it is
-/// d / t_k, or ∞ moving away).
+/// `kappa`, surely stays in the box `lo .. hi` (0 if `p` is not inside it):
+/// the least [`face_root`] over the six faces.
 #[inline]
 pub(crate) fn exit(p: DVec3, t: DVec3, kappa: f64, lo: DVec3, hi: DVec3) -> f64 {
     let mut s = f64::INFINITY;
@@ -252,14 +226,37 @@ pub(crate) fn exit(p: DVec3, t: DVec3, kappa: f64, lo: DVec3, hi: DVec3) -> f64 
                 return 0.0;
             }
             if d.is_finite() {
-                let den = toward + (toward * toward + 2.0 * kappa * d).sqrt();
-                if den > 0.0 {
-                    s = s.min(2.0 * d / den);
-                }
+                s = s.min(face_root(d, toward, kappa));
             }
         }
     }
     s
+}
+
+/// The least arc s ≥ 0 after which a curve bending at most `kappa` may have
+/// moved `d` ≥ 0 along an axis it moves along at rate `toward` (the tangent's
+/// component): along an arc s each coordinate is within κs²/2 of the
+/// tangent's, so this is the root of κs²/2 + toward·s = d, in the form
+/// without cancellation for either sign of `toward` (∞ where there is none:
+/// a straight curve moving away or parallel; 0 on the face itself when it
+/// can bend off it).
+#[inline]
+pub(crate) fn face_root(d: f64, toward: f64, kappa: f64) -> f64 {
+    let r = (toward * toward + 2.0 * kappa * d).sqrt();
+    if toward >= 0.0 {
+        let den = toward + r;
+        if den > 0.0 {
+            2.0 * d / den
+        } else if d == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    } else if kappa > 0.0 {
+        (r - toward) / kappa
+    } else {
+        f64::INFINITY
+    }
 }
 
 #[cfg(test)]

@@ -182,22 +182,4 @@ impl SunColumns {
         }
         true
     }
-
-    /// The stretch [t0, t1] (t0 ≥ 0) of the ray from `p` toward the sun
-    /// within which it may meet an object: the span of the bounding spheres
-    /// of its cell's objects that lie ahead; `None` when there are none (the
-    /// point is sunlit).
-    #[inline]
-    pub fn span(&self, p: DVec3) -> Option<(f64, f64)> {
-        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-        for &o in self.candidates(p) {
-            let (c, r) = self.spheres[o as usize];
-            let s = (c - p).dot(self.sun);
-            if s + r >= 0.0 {
-                t0 = t0.min(s - r);
-                t1 = t1.max(s + r);
-            }
-        }
-        (t0 <= t1).then_some((t0.max(0.0), t1))
-    }
 }
