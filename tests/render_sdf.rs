@@ -28,15 +28,20 @@ fn objects() -> Vec<SceneObject> {
 const EPS: f64 = 1e-4;
 const MAX_T: f64 = 500.0;
 
-/// Deterministic rays from the origin area toward the objects.
-fn rays(n: usize) -> Vec<(DVec3, DVec3)> {
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut next = || {
+/// A deterministic stream of numbers in [0, 1) (xorshift64 from `seed`).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
         state ^= state << 13;
         state ^= state >> 7;
         state ^= state << 17;
         (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    }
+}
+
+/// Deterministic rays from the origin area toward the objects.
+fn rays(n: usize) -> Vec<(DVec3, DVec3)> {
+    let mut next = uniform(0x2545_f491_4f6c_dd1d);
     (0..n)
         .map(|_| {
             let o = DVec3::new(next() - 0.5, 1.5 + next(), next() - 0.5);
@@ -275,13 +280,7 @@ fn on_arc(p: DVec3, t: DVec3, n: DVec3, kappa: f64, s: f64) -> DVec3 {
 fn free_arcs_of_the_grid_are_free() {
     let objs = objects();
     let grid = SceneDistance::Grid(Box::new(Grid::build(&objs, f64::NEG_INFINITY).unwrap()));
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(0x9e37_79b9_7f4a_7c15);
     let mut counters = Default::default();
     let (mut long, mut total) = (0, 0);
     for k in 0..3000 {
@@ -342,19 +341,13 @@ fn sun_columns_agree_with_marching_every_object() {
         }
         true
     };
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(0x2545_f491_4f6c_dd1d);
     let mut counters = Default::default();
     let (mut shadowed, mut skipped) = (0, 0);
     for _ in 0..20_000 {
         // Ground points under and behind the objects.
         let p = DVec3::new(-20.0 + 40.0 * next(), 0.0, 40.0 + 120.0 * next());
-        if nearest_distance(&objs, p) < 1e-3 {
+        if mirage::scene::sdf::nearest_object(&objs, p).0 < 1e-3 {
             continue;
         }
         let before = counters;
@@ -365,8 +358,4 @@ fn sun_columns_agree_with_marching_every_object() {
     }
     assert!(shadowed > 500, "only {shadowed} points in shadow");
     assert!(skipped > 5000, "only {skipped} points without a query");
-}
-
-fn nearest_distance(objs: &[SceneObject], p: DVec3) -> f64 {
-    mirage::scene::sdf::nearest_object(objs, p).0
 }
