@@ -9,13 +9,28 @@
 //!
 //! - ends at once, sunlit, where its cell lists no object ahead of it (most
 //!   of the ground of a scene: no distance query at all);
-//! - else is sphere-traced through the listed objects only, over the stretch
-//!   of the ray their bounding spheres span, each object bounded by its
-//!   sphere while that is more than a metre away.
+//! - else asks each listed object ahead whether the stretch of the ray its
+//!   bounding sphere spans meets it, in closed form
+//!   ([`Sdf::segment_meets`](crate::scene::sdf::Sdf::segment_meets): unions
+//!   of boxes, cylinders, spheres and capsules, moved, turned and scaled);
+//! - and sphere-traces through the objects left undecided only (a rounded
+//!   box met near its rounded edges, a smooth union, …), over the stretch
+//!   their bounding spheres span, each bounded by its sphere while that is
+//!   more than a metre away.
+//!
+//! The closed forms matter most for points on an object: a ray leaving a
+//! ship's side grew its sphere-tracing steps from the sub-millimetre start
+//! offset only geometrically, 20–30 evaluations of the whole ship a point
+//! (sea: 7.0 shadow evaluations a pixel before, 0.0 after, the trace 30 %
+//! faster).
 //!
 //! Exact, not approximate: an object left out of a ray's list has its
 //! bounding sphere more than a millimetre away from the whole ray, so it can
-//! neither block the ray nor come within the hit tolerance of it.
+//! neither block the ray nor come within the hit tolerance of it. The closed
+//! forms are for the exact surfaces; the sphere tracer's hit tolerance
+//! (10⁻⁴ m + 10⁻⁷ of the distance) can call a ray that passes that close to
+//! a surface blocked, the closed forms do not (on road.json, one row of 30
+//! pixels under a van's number plate).
 
 use super::accel::Counters;
 use crate::scene::sdf::SceneObject;
@@ -137,20 +152,28 @@ impl SunColumns {
             if s + r < 0.0 {
                 continue; // behind the point
             }
+            let (a, b) = ((s - r).max(0.0), s + r);
+            // Most shapes settle the question in closed form.
+            match objects[o as usize].shape.segment_meets(p, self.sun, a, b) {
+                Some(true) => return false,
+                Some(false) => continue,
+                None => {}
+            }
             if let Some(slot) = near.get_mut(count) {
                 *slot = o;
             }
             count += 1;
-            t0 = t0.min(s - r);
-            t1 = t1.max(s + r);
+            t0 = t0.min(a);
+            t1 = t1.max(b);
         }
-        // A crowded cell (more than 16 ahead) marches through its whole list.
+        // A crowded cell (more than 16 left to march) marches through its
+        // whole list.
         let list = match count {
             0 => return true,
             n if n <= near.len() => &near[..n],
             _ => cands,
         };
-        let mut t = t0.max(0.0);
+        let mut t = t0;
         for _ in 0..512 {
             let x = p + self.sun * t;
             counters.queries += 1;

@@ -35,7 +35,8 @@
 //!    `objects[2].shape.children[1].radius: must be > 0, got -1`.
 //!    Evaluating a shape that failed validation gives meaningless numbers.
 //! 3. Evaluate: [`Sdf::distance`], [`Sdf::normal`], [`nearest_object`],
-//!    [`sphere_trace`].
+//!    [`sphere_trace`]; for straight segments, [`Sdf::segment_meets`] (in
+//!    closed form where the shapes allow).
 //!
 //! # JSON schema
 //!
@@ -123,6 +124,7 @@
 mod bounds;
 mod construction;
 mod distance;
+mod segment;
 mod serde_payloads;
 mod trace;
 mod validate;
