@@ -98,7 +98,7 @@ fn run_3d<F: LaneField>(
 /// One buffer of lane states: position, v = n·t, arc length, and the rate's
 /// non-trivial parts (a = dv/dτ = n∇n, n = ds/dτ; dx/dτ is v itself).
 #[derive(Clone, Copy)]
-struct Buf3<const N: usize> {
+pub(super) struct Buf3<const N: usize> {
     x: [f64; N],
     y: [f64; N],
     z: [f64; N],
@@ -113,7 +113,7 @@ struct Buf3<const N: usize> {
 }
 
 impl<const N: usize> Buf3<N> {
-    const ZERO: Self = Buf3 {
+    pub(super) const ZERO: Self = Buf3 {
         x: [0.0; N],
         y: [0.0; N],
         z: [0.0; N],
@@ -128,7 +128,7 @@ impl<const N: usize> Buf3<N> {
         n: [1.0; N],
     };
 
-    fn state(&self, i: usize) -> (RayState, RayRate) {
+    pub(super) fn state(&self, i: usize) -> (RayState, RayRate) {
         let v = V3::new(self.vx[i], self.vy[i], self.vz[i]);
         (
             RayState {
@@ -307,7 +307,7 @@ impl<F: LaneField, const N: usize> Kernel<N> for Lanes3<'_, F, N> {
 /// two elements of one array, and kept the final sum scalar; see
 /// [`LaneSet::step_parts`]).
 #[inline(always)]
-fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
+pub(super) fn rk4_3d<F: LaneField, const N: usize, const FMA: bool>(
     (c, cache): (&F, &mut F::Cache<N>),
     h: &[f64; N],
     y0: &Buf3<N>,

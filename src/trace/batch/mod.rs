@@ -88,6 +88,7 @@ mod job;
 mod kernel;
 mod lanes;
 mod num;
+mod pack;
 pub mod stratified;
 pub(crate) mod tangent;
 mod terms;
@@ -96,6 +97,7 @@ pub use isa::{Isa, exp_in_place};
 pub use job::{BatchOptions, RayJob};
 pub use kernel::{trace_air_3d, trace_batch_3d};
 pub use lanes::LANES;
+pub use pack::{PACK, PackCache, PackStepper};
 pub use stratified::{NotStratified, trace_air_2d, trace_batch_2d};
 
 use crate::medium::Field;
