@@ -44,6 +44,7 @@ use super::accel::Aabb;
 use crate::math::V3;
 use crate::medium::cull::{HotSpotGrid, Reach};
 use crate::medium::{Field, IndexField, LogisticMedium, Medium, VerticalFeature};
+use crate::trace::batch::PackStepper;
 use crate::trace::{Earth, OnEarth};
 use glam::{DVec2, DVec3};
 
@@ -430,6 +431,17 @@ impl Air {
     /// Whether δ ≡ 0 (rays are straight lines).
     pub fn is_straight(&self) -> bool {
         self.straight
+    }
+
+    /// What integrates packs of rays in SIMD lanes through this air
+    /// ([`super::packs`]), where that pays: curved rays through hot-spot
+    /// zones (elsewhere a ray takes few steps, or a path table serves it) in
+    /// a medium kind the lanes evaluate.
+    pub fn pack_stepper(&self) -> Option<PackStepper<'_>> {
+        if self.straight || self.zones.is_empty() {
+            return None;
+        }
+        PackStepper::new(&self.field, self.earth)
     }
 
     /// Whether δ depends on the height alone.

@@ -34,11 +34,12 @@
 
 use super::accel::{Counters, Query, SceneDistance};
 use super::air::{Air, Fate};
+use super::packs::AheadStep;
 use super::paths::{PathTable, TableRay};
 use crate::math::V3;
 use crate::scene::sdf::nearest_object;
 use crate::trace::state::rate;
-use crate::trace::{Earth, RayState, Segment, rk4_step};
+use crate::trace::{Earth, RayRate, RayState, Segment, rk4_step};
 use glam::DVec3;
 
 /// Over-relaxation factor of the enhanced and quadric tracers.
@@ -166,6 +167,30 @@ pub struct Marcher<'a> {
     pub ground: bool,
 }
 
+/// The launch point of camera rays: what their starting states share (the
+/// rate's dx/dτ = v is each ray's own).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Launch {
+    x: V3,
+    n0: f64,
+    rate: RayRate,
+}
+
+impl Launch {
+    /// The state and rate of the ray along the unit `dir`: v = n·dir.
+    pub fn along(&self, dir: DVec3) -> (RayState, RayRate) {
+        let v = V3::new(dir.x, dir.y, dir.z) * self.n0;
+        (
+            RayState {
+                x: self.x,
+                v,
+                s: 0.0,
+            },
+            RayRate { dx: v, ..self.rate },
+        )
+    }
+}
+
 /// One step of a path.
 enum Advance {
     /// Moved by this much arc (an upper bound); `free_after`: no object can be
@@ -209,20 +234,20 @@ struct Pending<S> {
 impl Marcher<'_> {
     /// Traces the ray from `origin` along the unit `dir` by integrating it.
     pub fn march(&self, origin: DVec3, dir: DVec3, stats: &mut MarchStats) -> Outcome {
-        let field = self.air.optics();
-        let x = V3::new(origin.x, origin.y, origin.z);
-        let n0 = 1.0 + crate::medium::IndexField::delta(&field, x);
-        let y = RayState {
-            x,
-            v: V3::new(dir.x, dir.y, dir.z) * n0,
-            s: 0.0,
-        };
-        let f = rate(&field, &y, &mut stats.medium_evaluations);
-        let n_max = if self.air.is_straight() {
-            1.0
-        } else {
-            self.air.n_max() * (1.0 + 1e-9)
-        };
+        self.march_ahead(self.launch(origin, dir, stats), &[], stats)
+    }
+
+    /// [`Marcher::march`] from a launch `start` ([`Marcher::launch`]) with
+    /// the ray's first RK4 steps already integrated ([`super::packs`]):
+    /// `ahead[k]` is the k-th step from there, as [`Marcher::step_length`]
+    /// makes them; past the last one the ray is integrated here.
+    pub fn march_ahead(
+        &self,
+        start: (RayState, RayRate),
+        ahead: &[AheadStep],
+        stats: &mut MarchStats,
+    ) -> Outcome {
+        let (y, f) = start;
         let mut path = CurvedPath {
             marcher: self,
             seg: Segment {
@@ -235,9 +260,51 @@ impl Marcher<'_> {
             theta: 1.0,
             arc_per_theta: 0.0,
             ground_theta: None,
-            n_max,
+            n_max: self.step_n_max(),
+            ahead,
+            next: 0,
         };
         self.drive(&mut path, stats)
+    }
+
+    /// The state and rate a ray from `origin` along the unit `dir` starts
+    /// with: v = n·dir.
+    pub fn launch(&self, origin: DVec3, dir: DVec3, stats: &mut MarchStats) -> (RayState, RayRate) {
+        self.launch_at(origin, stats).along(dir)
+    }
+
+    /// What every ray launched from `origin` shares.
+    pub fn launch_at(&self, origin: DVec3, stats: &mut MarchStats) -> Launch {
+        let field = self.air.optics();
+        let x = V3::new(origin.x, origin.y, origin.z);
+        let n0 = 1.0 + crate::medium::IndexField::delta(&field, x);
+        let y = RayState {
+            x,
+            v: V3::new(0.0, 0.0, 0.0),
+            s: 0.0,
+        };
+        Launch {
+            x,
+            n0,
+            rate: rate(&field, &y, &mut stats.medium_evaluations),
+        }
+    }
+
+    /// The bound on n that turns a step's arc length into its τ-length
+    /// (h = arc / n_max), a hair above the air's so that rounding in n never
+    /// lets a step run further than the arc it was given.
+    pub fn step_n_max(&self) -> f64 {
+        if self.air.is_straight() {
+            1.0
+        } else {
+            self.air.n_max() * (1.0 + 1e-9)
+        }
+    }
+
+    /// The arc length of the RK4 step a ray at `x` takes next.
+    #[inline]
+    pub fn step_length(&self, x: V3) -> f64 {
+        self.air.step_at(dvec(x)).min(self.max_distance)
     }
 
     /// Traces a camera ray along an interpolated path of `table`.
@@ -420,6 +487,9 @@ struct CurvedPath<'m, 'a> {
     /// The step's first ground crossing.
     ground_theta: Option<f64>,
     n_max: f64,
+    /// Steps integrated ahead, and the next one to take.
+    ahead: &'m [AheadStep],
+    next: usize,
 }
 
 #[inline]
@@ -432,10 +502,20 @@ impl CurvedPath<'_, '_> {
     fn next_step(&mut self, stats: &mut MarchStats) {
         let m = self.marcher;
         let (y, f) = (self.seg.y1, self.seg.f1);
-        let h_arc = m.air.step_at(dvec(y.x)).min(m.max_distance);
-        let h = h_arc / self.n_max;
-        let (y1, f1) = rk4_step(&m.air.optics(), &y, &f, h, &mut stats.medium_evaluations);
-        stats.rk4_steps += 1;
+        let (y1, f1, h, h_arc) = match self.ahead.get(self.next) {
+            // Integrated ahead (and counted there) from this very state.
+            Some(a) => {
+                self.next += 1;
+                (a.y, a.f, a.h, a.arc)
+            }
+            None => {
+                let h_arc = m.step_length(y.x);
+                let h = h_arc / self.n_max;
+                let (y1, f1) = rk4_step(&m.air.optics(), &y, &f, h, &mut stats.medium_evaluations);
+                stats.rk4_steps += 1;
+                (y1, f1, h, h_arc)
+            }
+        };
         self.seg = Segment {
             y0: y,
             f0: f,
@@ -454,14 +534,26 @@ impl CurvedPath<'_, '_> {
 }
 
 impl RayPath for CurvedPath<'_, '_> {
-    type State = (Segment<f64>, f64, f64, Option<f64>);
+    type State = (Segment<f64>, f64, f64, Option<f64>, usize);
 
     fn state(&self) -> Self::State {
-        (self.seg, self.theta, self.arc_per_theta, self.ground_theta)
+        (
+            self.seg,
+            self.theta,
+            self.arc_per_theta,
+            self.ground_theta,
+            self.next,
+        )
     }
 
     fn restore(&mut self, s: Self::State) {
-        (self.seg, self.theta, self.arc_per_theta, self.ground_theta) = s;
+        (
+            self.seg,
+            self.theta,
+            self.arc_per_theta,
+            self.ground_theta,
+            self.next,
+        ) = s;
     }
 
     fn position(&self) -> DVec3 {

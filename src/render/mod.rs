@@ -31,6 +31,7 @@ pub mod dispersion;
 pub mod glare;
 pub mod march;
 pub mod output;
+pub mod packs;
 pub mod paths;
 pub mod shadow;
 pub mod sky;
@@ -38,11 +39,13 @@ pub mod sky;
 use crate::error::Result;
 use crate::io::{Output, OutputKind, check_outputs, write_atomic};
 use crate::scene::Scene;
+use crate::trace::batch::PACK;
 use accel::{Aabb, Counters, Grid, SceneDistance};
 use air::Air;
 use camera::{Camera, sample_offset};
 use glam::DVec3;
 use march::{HitTolerance, MarchStats, Marcher, Outcome, TracerKind};
+use packs::Packer;
 use paths::{PathTable, TableSettings, TableStats};
 use rayon::prelude::*;
 use shadow::SunColumns;
@@ -90,6 +93,9 @@ pub struct RenderOptions {
     pub hit_fraction: f64,
     /// Add the scene's veiling glare (if it has one) to lit renders.
     pub glare: bool,
+    /// Through hot-spot air, integrate neighbouring camera rays together in
+    /// SIMD lanes ([`packs`]) instead of each on its own.
+    pub packs: bool,
 }
 
 impl Default for RenderOptions {
@@ -105,6 +111,7 @@ impl Default for RenderOptions {
             progress: false,
             hit_fraction: 0.001,
             glare: true,
+            packs: true,
         }
     }
 }
@@ -579,34 +586,82 @@ impl Renderer {
         let (x0, y0) = (tx * TILE, ty * TILE);
         let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
         let mut stats = RenderStats::default();
-        let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+        let marcher = self.marcher();
+        let origin = self.camera.origin;
+        let mut packer = if self.options.packs {
+            self.air.pack_stepper().map(Packer::new)
+        } else {
+            None
+        };
+        // Samples waiting for a full pack: (pixel in the tile, direction).
+        let mut queue: Vec<(usize, DVec3)> = Vec::with_capacity(PACK);
+        let mut sums = vec![[0.0f64; 3]; ((x1 - x0) * (y1 - y0)) as usize];
+        let mut k = 0;
         for y in y0..y1 {
             for x in x0..x1 {
-                let mut sum = [0.0f64; 3];
                 for i in 0..self.samples {
                     let (u, v) = sample_offset(i);
                     let dir = self.camera.direction(x as f64 + u, y as f64 + v);
                     let on_table = self.table.as_ref().and_then(|t| t.ray(dir).map(|r| (t, r)));
-                    let outcome = match &on_table {
-                        Some((t, ray)) => {
+                    let outcome = match (&on_table, &mut packer) {
+                        (Some((t, ray)), _) => {
                             stats.table_samples += 1;
-                            self.marcher().march_table(t, ray, &mut stats.march)
+                            marcher.march_table(t, ray, &mut stats.march)
                         }
-                        None => self
-                            .marcher()
-                            .march(self.camera.origin, dir, &mut stats.march),
+                        (None, Some(p)) => {
+                            queue.push((k, dir));
+                            if queue.len() == PACK {
+                                self.trace_pack(&marcher, p, &mut queue, &mut sums, &mut stats);
+                            }
+                            continue;
+                        }
+                        (None, None) => marcher.march(origin, dir, &mut stats.march),
                     };
                     let c = self.shade(&outcome, &mut stats.shadow);
-                    for k in 0..3 {
-                        sum[k] += c[k];
+                    for (s, c) in sums[k].iter_mut().zip(c) {
+                        *s += c;
                     }
                     stats.samples += 1;
                 }
-                let inv = 1.0 / self.samples as f64;
-                out.push(sum.map(|s| (s * inv) as f32));
+                k += 1;
             }
         }
+        if let Some(p) = &mut packer {
+            self.trace_pack(&marcher, p, &mut queue, &mut sums, &mut stats);
+        }
+        let inv = 1.0 / self.samples as f64;
+        let out = sums.iter().map(|s| s.map(|s| (s * inv) as f32)).collect();
         (out, stats)
+    }
+
+    /// Traces and shades the queued samples as one pack: integrated ahead
+    /// together ([`packs`]), then each sphere-traced along its steps.
+    fn trace_pack(
+        &self,
+        marcher: &Marcher,
+        packer: &mut Packer,
+        queue: &mut Vec<(usize, DVec3)>,
+        sums: &mut [[f64; 3]],
+        stats: &mut RenderStats,
+    ) {
+        if queue.is_empty() {
+            return;
+        }
+        let launch = marcher.launch_at(self.camera.origin, &mut stats.march);
+        let mut dirs = [DVec3::ZERO; PACK];
+        for (d, &(_, dir)) in dirs.iter_mut().zip(queue.iter()) {
+            *d = dir;
+        }
+        let ahead = packer.integrate(marcher, &launch, &dirs[..queue.len()], &mut stats.march);
+        for (&(k, dir), steps) in queue.iter().zip(ahead) {
+            let outcome = marcher.march_ahead(launch.along(dir), steps, &mut stats.march);
+            let c = self.shade(&outcome, &mut stats.shadow);
+            for (s, c) in sums[k].iter_mut().zip(c) {
+                *s += c;
+            }
+            stats.samples += 1;
+        }
+        queue.clear();
     }
 }
 
@@ -648,6 +703,10 @@ pub struct CommandOptions {
     /// Integrate every ray, even where a table of paths could be reused.
     #[arg(long)]
     pub no_path_reuse: bool,
+    /// Integrate every camera ray through hot-spot air on its own, not in
+    /// SIMD packs of neighbouring rays (for comparison).
+    #[arg(long)]
+    pub no_packs: bool,
     /// Leave out the scene's veiling glare.
     #[arg(long)]
     pub no_glare: bool,
@@ -740,6 +799,7 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
         straight: o.straight,
         tracer: o.tracer,
         path_reuse: !o.no_path_reuse,
+        packs: !o.no_packs,
         samples_per_pixel: o.spp,
         width: o.width,
         height: o.height,
