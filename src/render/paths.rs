@@ -18,8 +18,9 @@
 use super::accel::Aabb;
 use super::air::Air;
 use crate::math::V3;
+use crate::trace::batch::{PACK, PackStepper};
 use crate::trace::state::rate;
-use crate::trace::{RayState, rk4_step};
+use crate::trace::{Earth, RayRate, RayState, rk4_step};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
@@ -234,6 +235,8 @@ pub struct PathTable {
     n_max: f64,
     paths: Vec<TablePath>,
     thetas: Vec<f64>,
+    /// Where to start looking for an elevation in `thetas`.
+    index: ThetaIndex,
     objects: Option<Aabb>,
     /// Horizontal centre and radius of every object's bounding sphere.
     footprints: Vec<(DVec2, f64)>,
@@ -241,6 +244,57 @@ pub struct PathTable {
     /// n at the top of the model, for the final direction of escaping rays.
     n_top: f64,
     stats: TableStats,
+}
+
+/// Uniform buckets over the table's elevations, each with the number of
+/// elevations at or below its start: a camera ray's place in the table in a
+/// few comparisons instead of a binary search over every path (which was a
+/// quarter of the time spent setting up a table ray).
+#[derive(Clone, Debug)]
+struct ThetaIndex {
+    first: f64,
+    per_bucket: f64,
+    counts: Vec<u32>,
+}
+
+impl ThetaIndex {
+    fn new(thetas: &[f64]) -> Self {
+        let buckets = (4 * thetas.len()).max(1);
+        let first = thetas.first().copied().unwrap_or(0.0);
+        let span = thetas.last().copied().unwrap_or(0.0) - first;
+        let per_bucket = if span > 0.0 {
+            buckets as f64 / span
+        } else {
+            0.0
+        };
+        let counts = (0..buckets)
+            .map(|b| {
+                let start = first + b as f64 / per_bucket.max(f64::MIN_POSITIVE);
+                thetas.partition_point(|&t| t <= start) as u32
+            })
+            .collect();
+        ThetaIndex {
+            first,
+            per_bucket,
+            counts,
+        }
+    }
+
+    /// The number of `thetas` (sorted) at or below `theta` (not NaN):
+    /// exactly `partition_point(|t| t <= theta)`, whatever the bucket's guess
+    /// (it is corrected by walking, a step or two at most).
+    #[inline]
+    fn count_at_most(&self, thetas: &[f64], theta: f64) -> usize {
+        let b = ((theta - self.first) * self.per_bucket) as usize;
+        let mut k = self.counts[b.min(self.counts.len() - 1)] as usize;
+        while k > 0 && thetas[k - 1] > theta {
+            k -= 1;
+        }
+        while k < thetas.len() && thetas[k] <= theta {
+            k += 1;
+        }
+        k
+    }
 }
 
 /// A camera ray's interpolated path: everything the sphere tracer needs.
@@ -310,8 +364,12 @@ impl PathTable {
         let mut thetas: Vec<f64> = (0..=n0)
             .map(|i| lo + (hi - lo) * i as f64 / n0 as f64)
             .collect();
-        let trace = |theta: f64| trace_path(air, origin, theta, h, s.max_distance, y_top);
-        let mut paths: Vec<TablePath> = thetas.par_iter().map(|&t| trace(t)).collect();
+        let geometry = PathGeometry {
+            h,
+            max_distance: s.max_distance,
+            y_top,
+        };
+        let mut paths = trace_paths(air, origin, &thetas, &geometry);
         let mut stats = TableStats {
             paths: paths.len(),
             ..Default::default()
@@ -331,26 +389,46 @@ impl PathTable {
             if todo.is_empty() {
                 break;
             }
-            let mids: Vec<(usize, TablePath, f64)> = todo
-                .par_iter()
-                .map(|&i| {
-                    let m = trace(0.5 * (thetas[i] + thetas[i + 1]));
+            let middles: Vec<f64> = todo
+                .iter()
+                .map(|&i| 0.5 * (thetas[i] + thetas[i + 1]))
+                .collect();
+            let mids: Vec<(usize, TablePath, f64)> = trace_paths(air, origin, &middles, &geometry)
+                .into_par_iter()
+                .zip(todo.par_iter())
+                .map(|(m, &i)| {
                     let e = midpoint_error(&paths[i], &paths[i + 1], &m, h);
                     (i, m, e)
                 })
                 .collect();
             stats.paths += mids.len();
-            // Insert from the right so that earlier indices stay valid.
-            for (i, m, e) in mids.into_iter().rev() {
-                let ok = e <= s.tolerance;
-                if ok {
-                    stats.error_estimate = stats.error_estimate.max(0.25 * e);
+            // Merge the middles in, in one pass (inserting them one by one
+            // moved the whole tail of the table each time).
+            let mut mids = mids.into_iter().peekable();
+            let old = std::mem::take(&mut paths).into_iter().enumerate();
+            let n = old.len() + todo.len();
+            let (mut merged_paths, mut merged_open) =
+                (Vec::with_capacity(n), Vec::with_capacity(n));
+            for (i, p) in old {
+                merged_paths.push(p);
+                if i == open.len() {
+                    break;
                 }
-                thetas.insert(i + 1, m.theta);
-                paths.insert(i + 1, m);
-                open[i] = !ok;
-                open.insert(i + 1, !ok);
+                match mids.next_if(|m| m.0 == i) {
+                    Some((_, m, e)) => {
+                        let ok = e <= s.tolerance;
+                        if ok {
+                            stats.error_estimate = stats.error_estimate.max(0.25 * e);
+                        }
+                        merged_paths.push(m);
+                        merged_open.extend([!ok, !ok]);
+                    }
+                    None => merged_open.push(open[i]),
+                }
             }
+            paths = merged_paths;
+            open = merged_open;
+            thetas = paths.iter().map(|p| p.theta).collect();
         }
         stats.rk4_steps = paths.iter().map(|p| p.nodes.len() as u64 - 1).sum();
         PathTable {
@@ -358,6 +436,7 @@ impl PathTable {
             h,
             n_max: air.n_max() * (1.0 + 1e-9),
             paths,
+            index: ThetaIndex::new(&thetas),
             thetas,
             objects,
             footprints,
@@ -405,8 +484,8 @@ impl PathTable {
             return None;
         }
         let k = self
-            .thetas
-            .partition_point(|&t| t <= theta)
+            .index
+            .count_at_most(&self.thetas, theta)
             .clamp(1, self.thetas.len() - 1)
             - 1;
         let (a, b) = (&self.paths[k], &self.paths[k + 1]);
@@ -555,45 +634,127 @@ impl PathTable {
     }
 }
 
+/// Traces the paths launched at elevations `thetas` from `origin`, the same
+/// paths [`trace_path`] traces one by one, in packs of [`PACK`] in SIMD lanes
+/// ([`PackStepper`]) where the medium has a lane form: every lane takes the
+/// same fixed step h, so a pack stays full until its paths end (they end
+/// within a few steps of each other, neighbours in elevation). The steps
+/// agree with the scalar ones to rounding (the polynomial exponential).
+fn trace_paths(air: &Air, origin: DVec3, thetas: &[f64], g: &PathGeometry) -> Vec<TablePath> {
+    let Some(stepper) = PackStepper::new(air.field(), Earth::Flat) else {
+        return thetas
+            .par_iter()
+            .map(|&t| trace_path(air, origin, t, g))
+            .collect();
+    };
+    thetas
+        .par_chunks(PACK)
+        .flat_map_iter(|chunk| {
+            let mut cache = stepper.cache();
+            let field = air.field();
+            let mut builders: Vec<PathBuilder> = chunk
+                .iter()
+                .map(|&t| PathBuilder::new(field, origin, t))
+                .collect();
+            let mut y = [builders[0].y; PACK];
+            let mut f = [builders[0].f; PACK];
+            let mut active = [false; PACK];
+            for (k, b) in builders.iter().enumerate() {
+                (y[k], f[k], active[k]) = (b.y, b.f, true);
+            }
+            let mut h = [0.0; PACK];
+            while active.iter().any(|&a| a) {
+                for k in 0..PACK {
+                    h[k] = if active[k] { g.h } else { 0.0 };
+                }
+                stepper.rk4(&mut cache, &h, &mut y, &mut f);
+                for (k, b) in builders.iter_mut().enumerate() {
+                    if active[k] {
+                        active[k] = !b.stepped(air, y[k], f[k], g);
+                    }
+                }
+            }
+            builders.into_iter().map(move |b| b.finish(g.h))
+        })
+        .collect()
+}
+
+/// What every path of a table shares: the step, where paths end.
+#[derive(Clone, Copy, Debug)]
+struct PathGeometry {
+    /// The τ step.
+    h: f64,
+    /// The scene's largest arc length.
+    max_distance: f64,
+    /// The top of the objects (or the camera, if higher).
+    y_top: f64,
+}
+
 /// Traces the path launched at elevation `theta` from `origin` (in the vertical
 /// plane; only the height matters in stratified air).
-fn trace_path(
-    air: &Air,
-    origin: DVec3,
-    theta: f64,
-    h: f64,
-    max_distance: f64,
-    y_top: f64,
-) -> TablePath {
+fn trace_path(air: &Air, origin: DVec3, theta: f64, g: &PathGeometry) -> TablePath {
     let field = air.field();
-    let mut evals = 0u64;
-    let x0 = V3::new(0.0, origin.y, 0.0);
-    let n0 = 1.0 + crate::medium::IndexField::delta(field, x0);
-    let mut y = RayState {
-        x: x0,
-        v: V3::new(theta.cos(), theta.sin(), 0.0) * n0,
-        s: 0.0,
-    };
-    let c = y.v.x;
-    let mut f = rate(field, &y, &mut evals);
-    let mut nodes = vec![[y.x.y, y.v.y]];
-    let mut tau_escape = f64::INFINITY;
-    let mut tau = 0.0;
-    let (tau_max, final_elevation) = loop {
-        let (y1, f1) = rk4_step(field, &y, &f, h, &mut evals);
-        tau += h;
-        nodes.push([y1.x.y, y1.v.y]);
-        let rising = y1.v.y > 0.0;
-        if tau_escape.is_infinite() && rising && y1.x.y > y_top && air.escapes(y1.x.y, c) {
-            tau_escape = tau;
+    let mut b = PathBuilder::new(field, origin, theta);
+    loop {
+        let (y1, f1) = rk4_step(field, &b.y, &b.f, g.h, &mut 0);
+        if b.stepped(air, y1, f1, g) {
+            return b.finish(g.h);
         }
-        if y1.s >= max_distance {
+    }
+}
+
+/// One path being traced: its state, nodes and what its end decides.
+struct PathBuilder {
+    theta: f64,
+    c: f64,
+    y: RayState,
+    f: RayRate,
+    nodes: Vec<[f64; 2]>,
+    tau: f64,
+    tau_escape: f64,
+    /// (τ at the maximum distance, final elevation), once the path ended.
+    end: Option<(f64, f64)>,
+}
+
+impl PathBuilder {
+    fn new(field: &crate::medium::Field, origin: DVec3, theta: f64) -> Self {
+        let x0 = V3::new(0.0, origin.y, 0.0);
+        let n0 = 1.0 + crate::medium::IndexField::delta(field, x0);
+        let y = RayState {
+            x: x0,
+            v: V3::new(theta.cos(), theta.sin(), 0.0) * n0,
+            s: 0.0,
+        };
+        PathBuilder {
+            theta,
+            c: y.v.x,
+            f: rate(field, &y, &mut 0),
+            y,
+            nodes: vec![[y.x.y, y.v.y]],
+            tau: 0.0,
+            tau_escape: f64::INFINITY,
+            end: None,
+        }
+    }
+
+    /// Takes the step that ended at `(y1, f1)`; true when the path ends.
+    fn stepped(&mut self, air: &Air, y1: RayState, f1: RayRate, g: &PathGeometry) -> bool {
+        let (y, h, c) = (self.y, g.h, self.c);
+        self.tau += h;
+        let tau = self.tau;
+        self.nodes.push([y1.x.y, y1.v.y]);
+        let rising = y1.v.y > 0.0;
+        if self.tau_escape.is_infinite() && rising && y1.x.y > g.y_top && air.escapes(y1.x.y, c) {
+            self.tau_escape = tau;
+        }
+        if y1.s >= g.max_distance {
             // Where, inside this step, the arc length reached the maximum.
-            let frac = (max_distance - y.s) / (y1.s - y.s);
-            break (tau - h + frac * h, y1.v.y.atan2(c));
+            let frac = (g.max_distance - y.s) / (y1.s - y.s);
+            self.end = Some((tau - h + frac * h, y1.v.y.atan2(c)));
+            return true;
         }
         let stop_below = y1.x.y < -BELOW_STOP && !rising;
-        let stop_above = tau_escape.is_finite() && y1.x.y > y_top + ABOVE_STOP;
+        let stop_above = self.tau_escape.is_finite() && y1.x.y > g.y_top + ABOVE_STOP;
         if stop_below || stop_above {
             let n1 = y1.v.norm();
             let elevation = if stop_above {
@@ -601,31 +762,39 @@ fn trace_path(
             } else {
                 y1.v.y.atan2(c)
             };
-            break (tau + (max_distance - y1.s) / n1, elevation);
+            self.end = Some((tau + (g.max_distance - y1.s) / n1, elevation));
+            return true;
         }
-        y = y1;
-        f = f1;
-    };
-    let mut mins = Vec::with_capacity(nodes.len());
-    let mut first_low = nodes.len() - 1;
-    for i in 0..nodes.len() - 1 {
-        let d = [nodes[i][0], nodes[i][1], nodes[i + 1][0], nodes[i + 1][1]];
-        let m = cubic_min(cubic(d, h));
-        if m < 0.0 && first_low == nodes.len() - 1 {
-            first_low = i;
-        }
-        mins.push(m);
+        self.y = y1;
+        self.f = f1;
+        false
     }
-    TablePath {
-        theta,
-        c,
-        nodes,
-        mins,
-        first_low,
-        tau_escape,
-        tau_max,
-        final_elevation,
-        escaped: tau_escape.is_finite(),
+
+    /// The table path of a path that ended.
+    fn finish(self, h: f64) -> TablePath {
+        let (tau_max, final_elevation) = self.end.expect("a path is finished once it ended");
+        let nodes = self.nodes;
+        let mut mins = Vec::with_capacity(nodes.len());
+        let mut first_low = nodes.len() - 1;
+        for i in 0..nodes.len() - 1 {
+            let d = [nodes[i][0], nodes[i][1], nodes[i + 1][0], nodes[i + 1][1]];
+            let m = cubic_min(cubic(d, h));
+            if m < 0.0 && first_low == nodes.len() - 1 {
+                first_low = i;
+            }
+            mins.push(m);
+        }
+        TablePath {
+            theta: self.theta,
+            c: self.c,
+            nodes,
+            mins,
+            first_low,
+            tau_escape: self.tau_escape,
+            tau_max,
+            final_elevation,
+            escaped: self.tau_escape.is_finite(),
+        }
     }
 }
 
@@ -653,4 +822,29 @@ fn midpoint_error(a: &TablePath, b: &TablePath, m: &TablePath, h: f64) -> f64 {
         worst = worst.max(dy.hypot(drho) / rho);
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ThetaIndex;
+
+    /// The index counts as the binary search does, for uneven elevations
+    /// (a refined table), values between, on and outside them.
+    #[test]
+    fn theta_index_counts_like_partition_point() {
+        let mut thetas: Vec<f64> = (0..200).map(|i| -0.01 + 1e-4 * i as f64).collect();
+        thetas.extend((0..300).map(|i| 0.0099 + 1e-7 * i as f64));
+        thetas.push(0.02);
+        let index = ThetaIndex::new(&thetas);
+        let mut probes: Vec<f64> = thetas.clone();
+        probes.extend(thetas.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+        probes.extend([-1.0, -0.0100001, 0.0200001, 5.0]);
+        for t in probes {
+            assert_eq!(
+                index.count_at_most(&thetas, t),
+                thetas.partition_point(|&x| x <= t),
+                "at {t}"
+            );
+        }
+    }
 }
