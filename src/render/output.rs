@@ -46,6 +46,55 @@ impl ToneMap {
     }
 }
 
+/// A tone map as 255 thresholds: the 8-bit value of x is the number of
+/// thresholds at or below it, which is [`ToneMap::apply`]'s value exactly,
+/// since that is a non-decreasing function of x (the filmic curve and the
+/// sRGB transfer both rise; tests compare the two over the whole f32 range).
+/// A binary search among 255 numbers instead of a `powf` per channel.
+#[derive(Clone, Debug)]
+struct Quantizer {
+    /// `thresholds[k]`: the least finite x ≥ 0 that maps to k + 1 or more;
+    /// +∞ where none does.
+    thresholds: [f32; 255],
+    /// For what is not finite (the filmic curve of +∞ is NaN, hence 0).
+    tone: ToneMap,
+}
+
+impl Quantizer {
+    fn new(tone: ToneMap) -> Self {
+        let mut thresholds = [f32::INFINITY; 255];
+        for (k, t) in thresholds.iter_mut().enumerate() {
+            let level = k as u8 + 1;
+            // Non-negative floats are ordered as their bit patterns; search
+            // [0, f32::MAX] for the first one that reaches `level`.
+            let (mut lo, mut hi) = (0u32, f32::MAX.to_bits());
+            if tone.apply(f32::from_bits(hi)) < level {
+                continue;
+            }
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if tone.apply(f32::from_bits(mid)) >= level {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            *t = f32::from_bits(lo);
+        }
+        Quantizer { thresholds, tone }
+    }
+
+    /// The 8-bit value of `x`, as [`ToneMap::apply`] gives it.
+    #[inline]
+    fn apply(&self, x: f32) -> u8 {
+        if x.is_finite() {
+            self.thresholds.partition_point(|&t| t <= x) as u8
+        } else {
+            self.tone.apply(x)
+        }
+    }
+}
+
 /// PNG bytes of a linear RGB image (row-major, top row first).
 pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -> Result<Vec<u8>> {
     use image::ImageEncoder;
@@ -57,13 +106,14 @@ pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -
             "the image buffer has the wrong size",
         ));
     }
-    // Per channel a `powf`: on all threads, the same bytes in any order.
+    // On all threads, the same bytes in any order.
+    let quantizer = Quantizer::new(tone);
     let mut raw = vec![0u8; pixels.len() * 3];
     raw.par_chunks_mut(3)
         .zip(pixels.par_iter())
         .for_each(|(out, p)| {
             for k in 0..3 {
-                out[k] = tone.apply(p[k]);
+                out[k] = quantizer.apply(p[k]);
             }
         });
     let mut bytes = Vec::new();
@@ -88,4 +138,45 @@ pub fn encode_exr(width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<Vec<u8
         .to_buffered(&mut bytes)
         .map_err(|e| crate::error::Error::encode("the EXR", e))?;
     Ok(bytes.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The thresholds give `apply`'s value for every f32 tried: a stride
+    /// through all non-negative floats, every float within 64 ulps of each
+    /// threshold, the negatives, ±∞ and NaN, for both tone maps.
+    #[test]
+    fn quantizer_equals_apply() {
+        for tone in [
+            ToneMap::Filmic { exposure: 1.0 },
+            ToneMap::Filmic { exposure: 3.7 },
+            ToneMap::Clamp,
+        ] {
+            let q = Quantizer::new(tone);
+            let mut xs: Vec<f32> = (0..=f32::MAX.to_bits())
+                .step_by(2039)
+                .map(f32::from_bits)
+                .collect();
+            for t in q.thresholds.iter().filter(|t| t.is_finite()) {
+                let b = t.to_bits();
+                xs.extend((b.saturating_sub(64)..b + 64).map(f32::from_bits));
+            }
+            xs.extend([
+                -1.0,
+                -0.0,
+                -1e30,
+                f32::NEG_INFINITY,
+                f32::INFINITY,
+                f32::NAN,
+            ]);
+            for x in xs {
+                assert_eq!(q.apply(x), tone.apply(x), "{tone:?} at {x:e}");
+            }
+            // Every level is reached (the curve spans 0..=255).
+            assert!(q.thresholds.iter().all(|t| t.is_finite()), "{tone:?}");
+            assert!(q.thresholds.windows(2).all(|w| w[0] < w[1]));
+        }
+    }
 }
