@@ -1,8 +1,9 @@
 //! Render benchmarks: the 1280×720 render time of a stratified scene (the sea,
 //! with path reuse) and of a hot-spot scene (the road); the three sphere
 //! tracers on the road at 320×180 (time, distance queries and SDF evaluations
-//! per pixel: the plain tracer evaluates all 57 objects at every query); and
-//! what path reuse buys on the sea at 640×360.
+//! per pixel: the plain tracer evaluates all 57 objects at every query);
+//! what path reuse buys on the sea at 640×360; and what integrating camera
+//! rays in packs of SIMD lanes buys on the road at 640×360.
 //!
 //! Run with `cargo bench --bench render`; the targets are for 2 cores:
 //! `RAYON_NUM_THREADS=2 cargo bench --bench render`. With
@@ -10,6 +11,7 @@
 //! bundled flat-ground scene at 1280×720, median of 3 (`benches/tables.sh`).
 
 use criterion::Criterion;
+use mirage::medium::IndexField;
 use mirage::render::march::TracerKind;
 use mirage::render::{RenderOptions, Renderer, summary};
 use mirage::scene::Scene;
@@ -31,6 +33,20 @@ fn options(width: u32, tracer: TracerKind, path_reuse: bool) -> RenderOptions {
         path_reuse,
         ..RenderOptions::default()
     }
+}
+
+/// The median of 3 timed renders after one unmeasured (setup included).
+fn median_render(scene: &Scene, opts: &RenderOptions) -> f64 {
+    black_box(Renderer::new(scene, opts).render());
+    let mut times: Vec<f64> = (0..3)
+        .map(|_| {
+            let t = Instant::now();
+            black_box(Renderer::new(scene, opts).render());
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[1]
 }
 
 /// Renders once and prints the work per pixel (the numbers criterion does
@@ -90,15 +106,35 @@ fn path_reuse(c: &mut Criterion) {
     g.finish();
 }
 
+fn packs(c: &mut Criterion) {
+    let s = scene("road");
+    let mut g = c.benchmark_group("road 640x360 packs");
+    g.sample_size(10).measurement_time(Duration::from_secs(30));
+    for packs in [true, false] {
+        let opts = RenderOptions {
+            packs,
+            ..options(640, TracerKind::Quadric, true)
+        };
+        let label = if packs { "packs" } else { "one by one" };
+        report(&format!("road, {label}"), &s, &opts);
+        g.bench_function(label, |b| {
+            b.iter(|| black_box(Renderer::new(&s, &opts).render()))
+        });
+    }
+    g.finish();
+}
+
 /// The README's table: 1280×720 renders (setup included), median of 3 after
-/// one unmeasured, on the rayon pool's threads.
+/// one unmeasured, on the rayon pool's threads; where the air has hot spots
+/// also with every camera ray integrated on its own (`--no-packs`), in the
+/// same run, and the ratio.
 fn table() {
     println!(
         "1280×720 renders (setup, path table and image; not the PNG), median of 3, rayon threads: {}\n",
         rayon::current_num_threads()
     );
-    println!("| scene | air | render time |");
-    println!("| --- | --- | --- |");
+    println!("| scene | air | render time | rays one by one (`--no-packs`) | packs' speed-up |");
+    println!("| --- | --- | --- | --- | --- |");
     for (name, air) in [
         ("sea", "stratified (path table)"),
         ("road", "one hot spot"),
@@ -107,16 +143,22 @@ fn table() {
     ] {
         let s = scene(name);
         let opts = options(1280, TracerKind::Quadric, true);
-        black_box(Renderer::new(&s, &opts).render());
-        let mut times: Vec<f64> = (0..3)
-            .map(|_| {
-                let t = Instant::now();
-                black_box(Renderer::new(&s, &opts).render());
-                t.elapsed().as_secs_f64()
-            })
-            .collect();
-        times.sort_by(f64::total_cmp);
-        println!("| {name} | {air} | {:.2} s |", times[1]);
+        let t = median_render(&s, &opts);
+        if s.medium.field().is_stratified() {
+            println!("| {name} | {air} | {t:.2} s | – | – |");
+        } else {
+            let alone = median_render(
+                &s,
+                &RenderOptions {
+                    packs: false,
+                    ..opts
+                },
+            );
+            println!(
+                "| {name} | {air} | {t:.2} s | {alone:.2} s | {:.2}× |",
+                alone / t
+            );
+        }
     }
 }
 
@@ -129,5 +171,6 @@ fn main() {
     full_hd_720(&mut c);
     tracers(&mut c);
     path_reuse(&mut c);
+    packs(&mut c);
     c.final_summary();
 }

@@ -435,10 +435,11 @@ impl Air {
 
     /// What integrates packs of rays in SIMD lanes through this air
     /// ([`super::packs`]), where that pays: curved rays through hot-spot
-    /// zones (elsewhere a ray takes few steps, or a path table serves it) in
-    /// a medium kind the lanes evaluate.
+    /// zones or over the round earth (where no path table serves them; over
+    /// the flat ground stratified air takes a table, or few steps), in a
+    /// medium kind the lanes evaluate.
     pub fn pack_stepper(&self) -> Option<PackStepper<'_>> {
-        if self.straight || self.zones.is_empty() {
+        if self.straight || (self.zones.is_empty() && self.earth.is_flat()) {
             return None;
         }
         PackStepper::new(&self.field, self.earth)

@@ -86,6 +86,7 @@ impl Renderer {
             stats.shadow += s.shadow;
             stats.table_seconds += s.table_seconds;
             stats.grid_seconds += s.grid_seconds;
+            stats.setup_seconds += s.setup_seconds;
             stats.trace_seconds += s.trace_seconds;
         }
         Rendered {

@@ -118,6 +118,8 @@ pub struct MarchStats {
     pub counters: Counters,
     /// RK4 steps.
     pub rk4_steps: u64,
+    /// Of which integrated ahead in packs of SIMD lanes ([`super::packs`]).
+    pub pack_steps: u64,
     /// Evaluations of δ and ∇δ.
     pub medium_evaluations: u64,
     /// Over-relaxed steps taken back.
@@ -128,6 +130,7 @@ impl std::ops::AddAssign for MarchStats {
     fn add_assign(&mut self, o: MarchStats) {
         self.counters += o.counters;
         self.rk4_steps += o.rk4_steps;
+        self.pack_steps += o.pack_steps;
         self.medium_evaluations += o.medium_evaluations;
         self.fallbacks += o.fallbacks;
     }

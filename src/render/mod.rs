@@ -133,6 +133,8 @@ pub struct RenderStats {
     pub table_seconds: f64,
     /// Seconds spent building the distance grid.
     pub grid_seconds: f64,
+    /// Seconds of setup: the grid and the table, built side by side.
+    pub setup_seconds: f64,
     /// Seconds spent tracing and shading.
     pub trace_seconds: f64,
     /// The veiling glare's sources and cost, if applied.
@@ -217,8 +219,75 @@ impl Renderer {
             scene.earth,
         );
         let mut setup = RenderStats::default();
+        let channels = Renderer::channel_renderers(scene, options);
+        // A dispersive render traces through its channels' renderers: this
+        // one's own table would go unused. The table's paths are those of a
+        // flat ground (heights along y): over the sphere every ray is
+        // integrated.
+        let wants_table = options.path_reuse
+            && channels.is_none()
+            && scene.earth.is_flat()
+            && air.is_stratified()
+            && !air.is_straight();
+        // The distance grid and the path table do not depend on each other:
+        // built side by side (each is partly serial inside).
         let start = Instant::now();
-        let distance = match options.tracer {
+        let ((distance, grid_seconds), table) = rayon::join(
+            || {
+                let start = Instant::now();
+                let d = Renderer::scene_distance(scene, options);
+                (d, start.elapsed().as_secs_f64())
+            },
+            || {
+                wants_table.then(|| {
+                    let start = Instant::now();
+                    let t = Renderer::build_table(&camera, &air, scene);
+                    (t, start.elapsed().as_secs_f64())
+                })
+            },
+        );
+        setup.setup_seconds = start.elapsed().as_secs_f64();
+        setup.grid_seconds = grid_seconds;
+        if let Some((t, seconds)) = &table {
+            setup.table_seconds = *seconds;
+            setup.table = Some(t.stats());
+        }
+        let samples = options
+            .samples_per_pixel
+            .unwrap_or(scene.samples_per_pixel)
+            .max(1);
+        Renderer {
+            scene: scene.clone(),
+            options: *options,
+            camera,
+            air,
+            distance,
+            sky: SkyModel::from_spec(
+                &scene.sky,
+                &scene.sun,
+                scene.earth.height(crate::math::V3::new(
+                    scene.camera.position.x,
+                    scene.camera.position.y,
+                    scene.camera.position.z,
+                )),
+                camera.pixel_angle(),
+            ),
+            table: table.map(|(t, _)| t),
+            samples,
+            setup,
+            objects_box,
+            sun_columns: if options.shading == Shading::Lit && scene.sun.direction.y > 0.0 {
+                SunColumns::new(&scene.objects, scene.sun.direction)
+            } else {
+                None
+            },
+            channels,
+        }
+    }
+
+    /// The objects' distances as the tracer queries them.
+    fn scene_distance(scene: &Scene, options: &RenderOptions) -> SceneDistance {
+        match options.tracer {
             TracerKind::Plain | TracerKind::Enhanced => {
                 SceneDistance::Direct(scene.objects.clone())
             }
@@ -235,87 +304,33 @@ impl Renderer {
                     None => SceneDistance::Direct(scene.objects.clone()),
                 }
             }
-        };
-        setup.grid_seconds = start.elapsed().as_secs_f64();
-        let samples = options
-            .samples_per_pixel
-            .unwrap_or(scene.samples_per_pixel)
-            .max(1);
-        let mut r = Renderer {
-            scene: scene.clone(),
-            options: *options,
-            camera,
-            air,
-            distance,
-            sky: SkyModel::from_spec(
-                &scene.sky,
-                &scene.sun,
-                scene.earth.height(crate::math::V3::new(
-                    scene.camera.position.x,
-                    scene.camera.position.y,
-                    scene.camera.position.z,
-                )),
-                camera.pixel_angle(),
-            ),
-            table: None,
-            samples,
-            setup,
-            objects_box,
-            sun_columns: if options.shading == Shading::Lit && scene.sun.direction.y > 0.0 {
-                SunColumns::new(&scene.objects, scene.sun.direction)
-            } else {
-                None
-            },
-            channels: Renderer::channel_renderers(scene, options),
-        };
-        // A dispersive render traces through its channels' renderers: this
-        // one's own table would go unused. The table's paths are those of a
-        // flat ground (heights along y): over the sphere every ray is
-        // integrated.
-        if options.path_reuse
-            && r.channels.is_none()
-            && scene.earth.is_flat()
-            && r.air.is_stratified()
-            && !r.air.is_straight()
-        {
-            let start = Instant::now();
-            let table = r.build_table();
-            r.setup.table_seconds = start.elapsed().as_secs_f64();
-            r.setup.table = Some(table.stats());
-            r.table = Some(table);
         }
-        r
     }
 
-    fn build_table(&self) -> PathTable {
-        let (lo, hi) = self.elevation_range();
-        let px = self.camera.pixel_angle();
+    fn build_table(camera: &Camera, air: &Air, scene: &Scene) -> PathTable {
+        let (lo, hi) = Renderer::elevation_range(camera);
+        let px = camera.pixel_angle();
         let settings = TableSettings {
             theta_range: (lo - 2.0 * px, hi + 2.0 * px),
             initial_spacing: 4.0 * px,
             min_spacing: px / 512.0,
             tolerance: 0.02 * px,
-            step: self.scene.step,
-            max_distance: self.scene.max_distance,
-            ground: self.scene.ground.is_some(),
+            step: scene.step,
+            max_distance: scene.max_distance,
+            ground: scene.ground.is_some(),
         };
-        PathTable::build(
-            &self.air,
-            self.camera.origin,
-            &self.scene.objects,
-            &settings,
-        )
+        PathTable::build(air, camera.origin, &scene.objects, &settings)
     }
 
     /// The lowest and highest elevation (radians) of the image's rays: the
     /// border, where the extremes of a pinhole image lie, and a coarse
     /// interior grid for safety (a ray outside the table is simply integrated).
-    fn elevation_range(&self) -> (f64, f64) {
-        let (w, h) = (self.camera.width as f64, self.camera.height as f64);
+    fn elevation_range(camera: &Camera) -> (f64, f64) {
+        let (w, h) = (camera.width as f64, camera.height as f64);
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
         let mut see = |px: f64, py: f64| {
-            let d = self.camera.direction(px, py);
+            let d = camera.direction(px, py);
             let e = d.y.atan2(d.x.hypot(d.z));
             lo = lo.min(e);
             hi = hi.max(e);
@@ -847,7 +862,7 @@ pub fn summary(renderer: &Renderer, image: &Rendered) -> String {
     let per = |n: u64| n as f64 / pixels;
     let mut out = format!(
         "{}: {}×{} px, {} spp, {} rays{}, tracer {}: {:.3} s (+ {:.3} s setup)\n\
-         per pixel: {:.1} distance queries, {:.1} SDF evaluations, {:.1} RK4 steps, {:.1} shadow SDF evaluations",
+         per pixel: {:.1} distance queries, {:.1} SDF evaluations, {:.1} RK4 steps{}, {:.1} shadow SDF evaluations",
         renderer.scene.name,
         image.width,
         image.height,
@@ -864,10 +879,15 @@ pub fn summary(renderer: &Renderer, image: &Rendered) -> String {
         },
         renderer.options.tracer.name(),
         s.trace_seconds,
-        s.table_seconds + s.grid_seconds,
+        s.setup_seconds,
         per(s.march.counters.queries),
         per(s.march.counters.object_evaluations),
         per(s.march.rk4_steps),
+        if s.march.pack_steps > 0 {
+            format!(" ({:.1} in packs)", per(s.march.pack_steps))
+        } else {
+            String::new()
+        },
         per(s.shadow.object_evaluations),
     );
     if let Some(g) = &s.glare {

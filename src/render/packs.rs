@@ -39,7 +39,7 @@ use crate::trace::{RayRate, RayState};
 use glam::DVec3;
 
 /// Most steps integrated ahead for one ray.
-pub const MAX_AHEAD: usize = 256;
+pub const MAX_AHEAD: usize = 1024;
 
 /// One RK4 step integrated ahead.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,6 +118,7 @@ impl<'a> Packer<'a> {
                     continue;
                 }
                 stats.rk4_steps += 1;
+                stats.pack_steps += 1;
                 stats.medium_evaluations += 4;
                 self.steps[k].push(AheadStep {
                     y: y[k],
