@@ -860,3 +860,67 @@ fn bounding_sphere_of_primitives_is_tight_lower_bound() {
         Sdf::intersection(vec![Sdf::plane(DVec3::Y, 0.0), shapes[0].clone()]).bounding_sphere();
     assert_eq!(r, 0.5);
 }
+
+// ---- gradients of unions: the near children only ----------------------
+
+/// The gradient of a union under a translation and a rotation, which
+/// evaluates only the children that can be nearest, is bit for bit the
+/// central difference over every child: on and near the surfaces (edges and
+/// corners, where children tie), and at larger steps.
+#[test]
+fn union_gradient_prunes_without_changing_a_bit() {
+    let ship = Sdf::translate(
+        DVec3::new(-60.0, 0.0, 4200.0),
+        Sdf::rotate(
+            DVec3::Y,
+            70.0,
+            Sdf::union(vec![
+                Sdf::cuboid(DVec3::new(0.0, 3.0, 0.0), DVec3::new(5.0, 3.0, 40.0)),
+                Sdf::cuboid(DVec3::new(0.0, 8.0, -25.0), DVec3::new(4.0, 2.0, 8.0)),
+                Sdf::cylinder(DVec3::new(0.0, 14.0, -25.0), 0.4, 4.0),
+                Sdf::sphere(DVec3::new(0.0, 6.5, 30.0), 1.5),
+                Sdf::rounded_box(DVec3::new(0.0, 6.5, 10.0), DVec3::new(3.0, 0.5, 5.0), 0.2),
+            ]),
+        ),
+    );
+    let Sdf::Translate { child, .. } = &ship else {
+        unreachable!()
+    };
+    let Sdf::Rotate(r) = child.as_ref() else {
+        unreachable!()
+    };
+    let full = |p: DVec3, h: f64| {
+        let e = [DVec3::X * h, DVec3::Y * h, DVec3::Z * h];
+        DVec3::new(
+            ship.distance(p + e[0]) - ship.distance(p - e[0]),
+            ship.distance(p + e[1]) - ship.distance(p - e[1]),
+            ship.distance(p + e[2]) - ship.distance(p - e[2]),
+        ) / (2.0 * h)
+    };
+    let to_world = |q: DVec3| r.local_to_world() * q + DVec3::new(-60.0, 0.0, 4200.0);
+    let mut rng = Rng(7);
+    let mut pruned = 0;
+    for i in 0..4000 {
+        // Points on the parts' surfaces, their edges and corners, and where
+        // two parts meet, in the ship's frame.
+        let q = match i % 4 {
+            0 => DVec3::new(5.0, 3.0 + 3.0 * rng.uniform(), 40.0 * rng.uniform()),
+            1 => DVec3::new(4.0, 10.0, -25.0 + 8.0 * (2.0 * rng.uniform() - 1.0)),
+            2 => DVec3::new(0.0, 6.0, 30.0) + rng.unit_vector() * 1.5,
+            _ => DVec3::new(0.0, 6.0, -25.0) + rng.unit_vector() * 6.0,
+        };
+        let p = to_world(q) + rng.unit_vector() * (1e-3 * rng.uniform());
+        for h in [NORMAL_RELATIVE_STEP * 4200.0, 0.01, 0.5] {
+            let (a, b) = (ship.gradient_with_step(p, h), full(p, h));
+            assert!(
+                a.x.to_bits() == b.x.to_bits()
+                    && a.y.to_bits() == b.y.to_bits()
+                    && a.z.to_bits() == b.z.to_bits(),
+                "at {p} (h = {h}): {a} vs {b}"
+            );
+        }
+        let mask = ship.near_children(p, 1e-3).expect("a union of five");
+        pruned += (mask.count_ones() < 5) as u32;
+    }
+    assert!(pruned > 3000, "only {pruned} of 4000 points pruned a child");
+}
