@@ -34,7 +34,6 @@
 
 use super::accel::{Counters, Query, SceneDistance};
 use super::air::{Air, Fate};
-use super::packs::AheadStep;
 use super::paths::{PathTable, TableRay};
 use crate::math::V3;
 use crate::scene::sdf::nearest_object;
@@ -168,6 +167,19 @@ pub struct Marcher<'a> {
     pub max_distance: f64,
     /// Whether the ground (the plane y = 0, or the sphere) stops rays.
     pub ground: bool,
+}
+
+/// One RK4 step integrated ahead ([`super::packs`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AheadStep {
+    /// The state where the step ends.
+    pub y: RayState,
+    /// The rate there.
+    pub f: RayRate,
+    /// The step's τ-length.
+    pub h: f64,
+    /// The arc length it was given (an upper bound of its length).
+    pub arc: f64,
 }
 
 /// The launch point of camera rays: what their starting states share (the

@@ -33,26 +33,13 @@
 //! number of steps almost always, so the lanes stay full (over 99.9 % there).
 
 use super::air::Fate;
-use super::march::{Launch, MarchStats, Marcher};
+use super::march::{AheadStep, Launch, MarchStats, Marcher};
+use crate::trace::RayState;
 use crate::trace::batch::{PACK, PackCache, PackStepper};
-use crate::trace::{RayRate, RayState};
 use glam::DVec3;
 
 /// Most steps integrated ahead for one ray.
 pub const MAX_AHEAD: usize = 1024;
-
-/// One RK4 step integrated ahead.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AheadStep {
-    /// The state where the step ends.
-    pub y: RayState,
-    /// The rate there.
-    pub f: RayRate,
-    /// The step's τ-length.
-    pub h: f64,
-    /// The arc length it was given (an upper bound of its length).
-    pub arc: f64,
-}
 
 /// Integrates packs of camera rays ahead; one per thread (it keeps the
 /// lanes' cache and the steps' buffers from one pack to the next).

@@ -148,7 +148,10 @@ impl Sdf {
                 Some(
                     d.iter()
                         .enumerate()
-                        .filter(|(_, di)| !(**di > reach))
+                        // NaN kept: whatever cannot be compared is not left out.
+                        .filter(|(_, di)| {
+                            (**di).partial_cmp(&reach) != Some(std::cmp::Ordering::Greater)
+                        })
                         .fold(0u64, |m, (i, _)| m | 1 << i),
                 )
             }
