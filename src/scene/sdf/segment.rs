@@ -106,8 +106,12 @@ impl Sdf {
     /// Whether the straight segment `o + t·d`, `t ∈ [t0, t1]` (finite,
     /// `t0 ≤ t1`; `d` need not be a unit vector), meets the closed solid:
     /// `Some(true)` or `Some(false)` when a closed form decides it, `None`
-    /// when the caller must sphere-trace (see the [module
-    /// documentation](self) for which shapes and cases).
+    /// when the caller must sphere-trace: spheres, boxes, capped cylinders,
+    /// capsules and planes in closed form; a rounded box by the boxes
+    /// around and inside it; unions by their children; translations,
+    /// rotations and scalings by moving the segment; a torus inside its box,
+    /// and intersections, differences and smooth unions that no bounding
+    /// test settles, are left to the caller.
     pub fn segment_meets(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<bool> {
         match self {
             Sdf::Sphere { center, radius } => {
