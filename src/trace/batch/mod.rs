@@ -75,7 +75,8 @@
 //! logistic kind), `terms` (the logistic model's terms), `air` (real air),
 //! `kernel` (the 3-D kernel), [`stratified`] (the 2-D one), `driver` (job
 //! scheduling, lane refill, freezing, events), `isa` (instruction sets and
-//! the run-time dispatch), `num` (the numbers the terms are written in:
+//! the run-time dispatch), `pack` ([`PackStepper`]: RK4 steps of a
+//! caller's pack of rays, for the renderer), `num` (the numbers the terms are written in:
 //! `f64` and forward-mode tangents) and `tangent` (the 3-D kernel with each
 //! ray's parameter sensitivities: the fit's exact Jacobian in lanes).
 
