@@ -507,8 +507,9 @@ struct CurvedPath<'m, 'a> {
     next: usize,
 }
 
+/// The glam vector of a tracer vector.
 #[inline]
-fn dvec(v: V3) -> DVec3 {
+pub(super) fn dvec(v: V3) -> DVec3 {
     DVec3::new(v.x, v.y, v.z)
 }
 

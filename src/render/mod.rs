@@ -632,11 +632,7 @@ impl Renderer {
                         }
                         (None, None) => marcher.march(origin, dir, &mut stats.march),
                     };
-                    let c = self.shade(&outcome, &mut stats.shadow);
-                    for (s, c) in sums[k].iter_mut().zip(c) {
-                        *s += c;
-                    }
-                    stats.samples += 1;
+                    self.add_sample(&outcome, &mut sums[k], &mut stats);
                 }
                 k += 1;
             }
@@ -670,13 +666,18 @@ impl Renderer {
         let ahead = packer.integrate(marcher, &launch, &dirs[..queue.len()], &mut stats.march);
         for (&(k, dir), steps) in queue.iter().zip(ahead) {
             let outcome = marcher.march_ahead(launch.along(dir), steps, &mut stats.march);
-            let c = self.shade(&outcome, &mut stats.shadow);
-            for (s, c) in sums[k].iter_mut().zip(c) {
-                *s += c;
-            }
-            stats.samples += 1;
+            self.add_sample(&outcome, &mut sums[k], stats);
         }
         queue.clear();
+    }
+
+    /// Shades a sample's outcome into its pixel's sum.
+    fn add_sample(&self, outcome: &Outcome, sum: &mut [f64; 3], stats: &mut RenderStats) {
+        let c = self.shade(outcome, &mut stats.shadow);
+        for (s, c) in sum.iter_mut().zip(c) {
+            *s += c;
+        }
+        stats.samples += 1;
     }
 }
 

@@ -33,7 +33,7 @@
 //! number of steps almost always, so the lanes stay full (over 99.9 % there).
 
 use super::air::Fate;
-use super::march::{AheadStep, Launch, MarchStats, Marcher};
+use super::march::{AheadStep, Launch, MarchStats, Marcher, dvec};
 use crate::trace::RayState;
 use crate::trace::batch::{PACK, PackCache, PackStepper};
 use glam::DVec3;
@@ -75,10 +75,9 @@ impl<'a> Packer<'a> {
         assert!(dirs.len() <= PACK, "at most {PACK} rays a pack");
         let air = marcher.air;
         let n_max = marcher.step_n_max();
-        let (mut y, mut f) = (
-            [launch.along(DVec3::Z).0; PACK],
-            [launch.along(DVec3::Z).1; PACK],
-        );
+        // Idle lanes hold any launch state (their steps are of length 0).
+        let (y0, f0) = launch.along(DVec3::Z);
+        let (mut y, mut f) = ([y0; PACK], [f0; PACK]);
         let mut active = [false; PACK];
         for (k, &dir) in dirs.iter().enumerate() {
             self.steps[k].clear();
@@ -130,9 +129,4 @@ impl<'a> Packer<'a> {
 /// ([`super::air::Air::fate`]): the tracer will not integrate it further.
 fn sky_bound(marcher: &Marcher, y: &RayState) -> bool {
     matches!(marcher.air.fate(dvec(y.x), dvec(y.v)), Some(Fate::Sky(_)))
-}
-
-#[inline]
-fn dvec(v: crate::math::V3) -> DVec3 {
-    DVec3::new(v.x, v.y, v.z)
 }
