@@ -456,6 +456,18 @@ impl Air {
         self.n_max
     }
 
+    /// The bound on n that turns a step's arc length into its τ-length
+    /// (h = arc / bound): a hair above [`Air::n_max`], so that rounding in n
+    /// never lets a step run further than the arc it was given; 1 for
+    /// straight rays.
+    pub fn step_n_max(&self) -> f64 {
+        if self.straight {
+            1.0
+        } else {
+            self.n_max * (1.0 + 1e-9)
+        }
+    }
+
     /// An upper bound of a ray's curvature |dt/ds| = |∇n⊥|/n (1/metre).
     pub fn curvature_max(&self) -> f64 {
         self.curvature_max

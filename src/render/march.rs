@@ -305,15 +305,9 @@ impl Marcher<'_> {
         }
     }
 
-    /// The bound on n that turns a step's arc length into its τ-length
-    /// (h = arc / n_max), a hair above the air's so that rounding in n never
-    /// lets a step run further than the arc it was given.
+    /// [`Air::step_n_max`] of the marcher's air.
     pub fn step_n_max(&self) -> f64 {
-        if self.air.is_straight() {
-            1.0
-        } else {
-            self.air.n_max() * (1.0 + 1e-9)
-        }
+        self.air.step_n_max()
     }
 
     /// The arc length of the RK4 step a ray at `x` takes next.

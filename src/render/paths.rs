@@ -358,7 +358,7 @@ impl PathTable {
             .collect();
         let objects = Aabb::of_objects(objects);
         let y_top = objects.map_or(origin.y, |b| b.max.y.max(origin.y));
-        let h = s.step / (air.n_max() * (1.0 + 1e-9));
+        let h = s.step / air.step_n_max();
         let (lo, hi) = s.theta_range;
         let n0 = ((hi - lo) / s.initial_spacing).ceil().max(1.0) as usize;
         let mut thetas: Vec<f64> = (0..=n0)
@@ -434,7 +434,7 @@ impl PathTable {
         PathTable {
             origin,
             h,
-            n_max: air.n_max() * (1.0 + 1e-9),
+            n_max: air.step_n_max(),
             paths,
             index: ThetaIndex::new(&thetas),
             thetas,
