@@ -39,7 +39,8 @@ struct TablePath {
     /// Height and vertical speed dy/dτ at τ = i·h.
     nodes: Vec<[f64; 2]>,
     /// Lower bound of the height over each interval (beyond the nodes: the
-    /// straight extension).
+    /// straight extension): the exact minimum where that is below the
+    /// ground, else a bound no lower than the ground ([`height_bound`]).
     mins: Vec<f64>,
     /// First interval whose lower bound is below the ground.
     first_low: usize,
@@ -79,6 +80,20 @@ impl TablePath {
         } else {
             let [y0, _, y1, _] = self.interval(i, h);
             y0.min(y1)
+        }
+    }
+
+    /// Height at node i (τ = i·h), past the last node on the straight
+    /// extension: what [`TablePath::at`] interpolates there, without the
+    /// interpolation.
+    #[inline]
+    fn node_height(&self, i: usize, h: f64) -> f64 {
+        let n = self.nodes.len();
+        if i < n {
+            self.nodes[i][0]
+        } else {
+            let [yl, vl] = self.nodes[n - 1];
+            yl + vl * ((i + 1 - n) as f64 * h)
         }
     }
 
@@ -159,6 +174,22 @@ fn critical_points([a, b, c, _]: [f64; 4]) -> ([f64; 2], usize) {
         }
     }
     (out, n)
+}
+
+/// A lower bound of the Hermite interval `d` over its step h, exact where
+/// the interval may go below the ground (y < 0): the least of the cubic's
+/// Bernstein coefficients (the curve lies in their convex hull) when that is
+/// not negative, else [`cubic_min`]. Where it matters, below the ground,
+/// the bound is the minimum itself; elsewhere a cheaper bound serves, since
+/// the table only asks whether an interval can reach the ground.
+fn height_bound(d: [f64; 4], h: f64) -> f64 {
+    let [y0, v0, y1, v1] = d;
+    let hull = y0.min(y1).min(y0 + h * v0 / 3.0).min(y1 - h * v1 / 3.0);
+    if hull >= 0.0 {
+        hull
+    } else {
+        cubic_min(cubic(d, h))
+    }
 }
 
 /// Lower bound (exact minimum) of the cubic over [0, 1].
@@ -786,7 +817,7 @@ impl PathBuilder {
         let mut first_low = nodes.len() - 1;
         for i in 0..nodes.len() - 1 {
             let d = [nodes[i][0], nodes[i][1], nodes[i + 1][0], nodes[i + 1][1]];
-            let m = cubic_min(cubic(d, h));
+            let m = height_bound(d, h);
             if m < 0.0 && first_low == nodes.len() - 1 {
                 first_low = i;
             }
@@ -812,12 +843,14 @@ impl PathBuilder {
 fn midpoint_error(a: &TablePath, b: &TablePath, m: &TablePath, h: f64) -> f64 {
     let len = a.nodes.len().max(b.nodes.len()).max(m.nodes.len());
     let c_avg = 0.5 * (a.c + b.c);
+    // The worst squared angle; one square root at the end (no overflow:
+    // heights and distances are far below 1e150).
     let mut worst = 0.0f64;
     for i in 1..len {
         let tau = i as f64 * h;
-        let (ya, _) = a.at(tau, h);
-        let (yb, _) = b.at(tau, h);
-        let (ym, _) = m.at(tau, h);
+        let ya = a.node_height(i, h);
+        let yb = b.node_height(i, h);
+        let ym = m.node_height(i, h);
         if ya < 0.0 && yb < 0.0 && ym < 0.0 {
             break;
         }
@@ -827,9 +860,9 @@ fn midpoint_error(a: &TablePath, b: &TablePath, m: &TablePath, h: f64) -> f64 {
         let dy = ym - 0.5 * (ya + yb);
         let drho = (m.c - c_avg) * tau;
         let rho = (m.c * tau).max(1e-9);
-        worst = worst.max(dy.hypot(drho) / rho);
+        worst = worst.max((dy * dy + drho * drho) / (rho * rho));
     }
-    worst
+    worst.sqrt()
 }
 
 #[cfg(test)]
