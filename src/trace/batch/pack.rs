@@ -49,8 +49,14 @@ pub struct PackStepper<'a> {
 }
 
 /// What a pack's field evaluations keep from one step to the next (each
-/// lane's culled hot spots); one per thread.
-pub struct PackCache(HotCache<PACK>);
+/// lane's culled hot spots), and the step's lane buffers; one per thread.
+pub struct PackCache {
+    hot: HotCache<PACK>,
+    /// The start state and the three stage states, then the result: kept
+    /// from step to step, since every field a step reads it has written in
+    /// that step first (building them afresh copied 7 kB of zeros a step).
+    work: Box<[Buf3<PACK>; 5]>,
+}
 
 impl<'a> PackStepper<'a> {
     /// A stepper for `field` over `earth`; `None` for a medium kind the lanes
@@ -75,10 +81,13 @@ impl<'a> PackStepper<'a> {
 
     /// A fresh cache for one thread's packs.
     pub fn cache(&self) -> PackCache {
-        PackCache(match &self.field {
-            PackField::Logistic(f) => f.cache::<PACK>(),
-            PackField::Air(_) => HotCache::new(None),
-        })
+        PackCache {
+            hot: match &self.field {
+                PackField::Logistic(f) => f.cache::<PACK>(),
+                PackField::Air(_) => HotCache::new(None),
+            },
+            work: Box::new([Buf3::<PACK>::ZERO; 5]),
+        }
     }
 
     /// One RK4 step of τ-length `h[i]` from `(y[i], f[i])` for every lane,
@@ -142,14 +151,17 @@ impl<'a> PackStepper<'a> {
         y: &mut [RayState; PACK],
         f: &mut [RayRate; PACK],
     ) {
+        let work = &mut cache.work;
         match (&self.field, self.earth) {
-            (PackField::Logistic(l), Earth::Flat) => step::<_, FMA>(l, &mut cache.0, h, y, f),
-            (PackField::Logistic(l), Earth::Round { radius }) => {
-                step::<_, FMA>(&EarthLanes::new(l, radius), &mut cache.0, h, y, f)
+            (PackField::Logistic(l), Earth::Flat) => {
+                step::<_, FMA>(l, &mut cache.hot, work, h, y, f)
             }
-            (PackField::Air(a), Earth::Flat) => step::<_, FMA>(a, &mut (), h, y, f),
+            (PackField::Logistic(l), Earth::Round { radius }) => {
+                step::<_, FMA>(&EarthLanes::new(l, radius), &mut cache.hot, work, h, y, f)
+            }
+            (PackField::Air(a), Earth::Flat) => step::<_, FMA>(a, &mut (), work, h, y, f),
             (PackField::Air(a), Earth::Round { radius }) => {
-                step::<_, FMA>(&EarthLanes::new(a, radius), &mut (), h, y, f)
+                step::<_, FMA>(&EarthLanes::new(a, radius), &mut (), work, h, y, f)
             }
         }
     }
@@ -160,16 +172,16 @@ impl<'a> PackStepper<'a> {
 fn step<F: LaneField, const FMA: bool>(
     field: &F,
     cache: &mut F::Cache<PACK>,
+    work: &mut [Buf3<PACK>; 5],
     h: &[f64; PACK],
     y: &mut [RayState; PACK],
     f: &mut [RayRate; PACK],
 ) {
-    let mut y0 = Buf3::<PACK>::ZERO;
+    let [y0, k2, k3, k4, y1] = work;
     for i in 0..PACK {
         y0.put(i, &y[i], &f[i]);
     }
-    let [mut k2, mut k3, mut k4, mut y1] = [Buf3::<PACK>::ZERO; 4];
-    rk4_3d::<F, PACK, FMA>((field, cache), h, &y0, [&mut k2, &mut k3, &mut k4], &mut y1);
+    rk4_3d::<F, PACK, FMA>((field, cache), h, y0, [k2, k3, k4], y1);
     for i in 0..PACK {
         (y[i], f[i]) = y1.state(i);
     }
