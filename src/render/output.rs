@@ -50,15 +50,25 @@ impl ToneMap {
 /// thresholds at or below it, which is [`ToneMap::apply`]'s value exactly,
 /// since that is a non-decreasing function of x (the filmic curve and the
 /// sRGB transfer both rise; tests compare the two over the whole f32 range).
-/// A binary search among 255 numbers instead of a `powf` per channel.
+/// A table lookup and a step or two up the thresholds instead of a `powf`
+/// per channel.
 #[derive(Clone, Debug)]
 struct Quantizer {
     /// `thresholds[k]`: the least finite x ≥ 0 that maps to k + 1 or more;
     /// +∞ where none does.
     thresholds: [f32; 255],
+    /// `start[b]`: the number of thresholds at or below the float whose bits
+    /// are `b << 16`, for every non-negative finite `b`. A float's level is
+    /// at least that of its bucket's start; the buckets are 2⁻⁷ wide in
+    /// relative terms, across which the curve climbs a level or two at most,
+    /// so the walk up from there is short (and exact whatever its length).
+    start: Box<[u8]>,
     /// For what is not finite (the filmic curve of +∞ is NaN, hence 0).
     tone: ToneMap,
 }
+
+/// The number of 2¹⁶-float buckets below +∞ (whose bits are 0x7F80_0000).
+const FINITE_BUCKETS: u32 = 0x7F80;
 
 impl Quantizer {
     fn new(tone: ToneMap) -> Self {
@@ -81,13 +91,29 @@ impl Quantizer {
             }
             *t = f32::from_bits(lo);
         }
-        Quantizer { thresholds, tone }
+        let start = (0..FINITE_BUCKETS)
+            .map(|b| thresholds.partition_point(|&t| t <= f32::from_bits(b << 16)) as u8)
+            .collect();
+        Quantizer {
+            thresholds,
+            start,
+            tone,
+        }
     }
 
     /// The 8-bit value of `x`, as [`ToneMap::apply`] gives it.
     #[inline]
     fn apply(&self, x: f32) -> u8 {
-        if x.is_finite() {
+        let bits = x.to_bits();
+        if bits >> 16 < FINITE_BUCKETS {
+            // Non-negative and finite: non-negative floats are ordered as
+            // their bits, so the bucket's start is a lower bound.
+            let mut k = self.start[(bits >> 16) as usize] as usize;
+            while k < self.thresholds.len() && self.thresholds[k] <= x {
+                k += 1;
+            }
+            k as u8
+        } else if x.is_finite() {
             self.thresholds.partition_point(|&t| t <= x) as u8
         } else {
             self.tone.apply(x)
@@ -146,7 +172,8 @@ mod tests {
 
     /// The thresholds give `apply`'s value for every f32 tried: a stride
     /// through all non-negative floats, every float within 64 ulps of each
-    /// threshold, the negatives, ±∞ and NaN, for both tone maps.
+    /// threshold, both sides of every bucket edge, the negatives, ±∞ and
+    /// NaN, for both tone maps.
     #[test]
     fn quantizer_equals_apply() {
         for tone in [
@@ -162,6 +189,10 @@ mod tests {
             for t in q.thresholds.iter().filter(|t| t.is_finite()) {
                 let b = t.to_bits();
                 xs.extend((b.saturating_sub(64)..b + 64).map(f32::from_bits));
+            }
+            // Both sides of every bucket edge of the lookup table.
+            for b in 1..FINITE_BUCKETS {
+                xs.extend([b << 16, (b << 16) - 1].map(f32::from_bits));
             }
             xs.extend([
                 -1.0,
