@@ -47,6 +47,7 @@ use crate::medium::{Field, IndexField, LogisticMedium, Medium, VerticalFeature};
 use crate::trace::batch::PackStepper;
 use crate::trace::{Earth, OnEarth};
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 /// Where a logistic term's σ is within e^(−ZONE_UNITS) of its limit: the term
 /// is then constant to far below anything an image can show (δ changes by
@@ -403,7 +404,11 @@ impl Air {
         // Far outside every hot spot the rim factor w underflows to exactly 0,
         // leaving the stratified terms (with the full S, as in the model).
         let far = 1e12;
+        // Up to ~400,000 evaluations: on all threads (the same values, in
+        // order), as the rest of the set-up waits on them.
         let delta: Vec<f64> = (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|i| field.delta(V3::new(far, i as f64 * dy, far)))
             .collect();
         let mut prefix_min = delta.clone();
