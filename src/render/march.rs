@@ -223,6 +223,12 @@ trait RayPath {
     fn position(&self) -> DVec3;
     /// Position and dx/dτ (|dx/dτ| ≈ n) where the ray is.
     fn probe(&self) -> (DVec3, DVec3);
+    /// The unit tangent of a ray vector from [`RayPath::probe`] (a path whose
+    /// probe gives it unit already returns it as it is).
+    #[inline]
+    fn unit(v: DVec3) -> DVec3 {
+        v.normalize()
+    }
     /// Arc length from the camera (for the hit tolerance).
     fn arc(&self) -> f64;
     /// Moves on by at most `limit` of arc (unlimited when `None`: no object can
@@ -354,7 +360,7 @@ impl Marcher<'_> {
                     }
                 }
                 let (p, v) = path.probe();
-                let t = v.normalize();
+                let t = P::unit(v);
                 let (q, free_arc) = self.distance.probe(p, t, kappa, &mut stats.counters);
                 queries += 1;
                 if let Some(pd) = pending.take()
@@ -677,6 +683,12 @@ impl RayPath for TablePathRay<'_> {
 
     fn probe(&self) -> (DVec3, DVec3) {
         self.table.position(self.ray, self.tau)
+    }
+
+    /// The table's tangent is unit already.
+    #[inline]
+    fn unit(v: DVec3) -> DVec3 {
+        v
     }
 
     fn arc(&self) -> f64 {
