@@ -96,33 +96,22 @@ impl TablePath {
             yl + vl * ((i + 1 - n) as f64 * h)
         }
     }
-
-    /// Height and dy/dτ at τ.
-    #[inline]
-    fn at(&self, tau: f64, h: f64) -> (f64, f64) {
-        let q = tau / h;
-        // The floor (negatives and NaN give 0) without a libm call.
-        let i = q as usize;
-        let d = self.interval(i, h);
-        hermite(d, q - i as f64, h)
-    }
 }
 
 /// Cubic Hermite value and τ-derivative at θ ∈ [0, 1] of interval data
-/// (y0, dy0/dτ, y1, dy1/dτ) over a step h.
+/// (y0, dy0/dτ, y1, dy1/dτ) over a step h, with 1/h given (the derivative
+/// by a product).
 #[inline]
-fn hermite([y0, v0, y1, v1]: [f64; 4], t: f64, h: f64) -> (f64, f64) {
+fn hermite_scaled([y0, v0, y1, v1]: [f64; 4], t: f64, h: f64, inv_h: f64) -> (f64, f64) {
     let t2 = t * t;
     let t3 = t2 * t;
     let y = (2.0 * t3 - 3.0 * t2 + 1.0) * y0
         + (t3 - 2.0 * t2 + t) * h * v0
         + (-2.0 * t3 + 3.0 * t2) * y1
         + (t3 - t2) * h * v1;
-    let dy = ((6.0 * t2 - 6.0 * t) * y0
-        + (3.0 * t2 - 4.0 * t + 1.0) * h * v0
-        + (-6.0 * t2 + 6.0 * t) * y1
-        + (3.0 * t2 - 2.0 * t) * h * v1)
-        / h;
+    let dy = ((6.0 * t2 - 6.0 * t) * (y0 - y1)) * inv_h
+        + (3.0 * t2 - 4.0 * t + 1.0) * v0
+        + (3.0 * t2 - 2.0 * t) * v1;
     (y, dy)
 }
 
@@ -339,6 +328,8 @@ pub struct TableRay {
     k: usize,
     w: f64,
     h: f64,
+    /// 1 / h.
+    inv_h: f64,
     /// τ after which no object can be met (left the objects' rectangle,
     /// escaped above them, reached the ground or the maximum distance).
     pub tau_objects_end: f64,
@@ -531,6 +522,7 @@ impl PathTable {
             k,
             w,
             h: self.h,
+            inv_h: 1.0 / self.h,
             tau_objects_end: tau_max,
             tau_ground: f64::INFINITY,
             tau_max,
@@ -647,20 +639,39 @@ impl PathTable {
     }
 
     /// Position and unit tangent of the interpolated path at τ.
+    ///
+    /// The interpolation between the two paths is linear in their Hermite
+    /// data, so the data are blended first and one cubic is evaluated (as
+    /// [`PathTable::ground_tau`] does); the tangent's length is
+    /// √(c² + (dy/dτ)²), the horizontal direction being unit. This is the
+    /// sphere tracer's inner loop: one division and one square root.
     #[inline]
     pub fn position(&self, r: &TableRay, tau: f64) -> (DVec3, DVec3) {
         let (a, b) = (&self.paths[r.k], &self.paths[r.k + 1]);
-        let (ya, va) = a.at(tau, r.h);
-        let (yb, vb) = b.at(tau, r.h);
-        let y = r.w * ya + (1.0 - r.w) * yb;
-        let vy = r.w * va + (1.0 - r.w) * vb;
+        let q = tau * r.inv_h;
+        // The floor (negatives and NaN give 0) without a libm call.
+        let i = q as usize;
+        let (da, db) = (a.interval(i, r.h), b.interval(i, r.h));
+        let (w, u) = (r.w, 1.0 - r.w);
+        let d = [
+            w * da[0] + u * db[0],
+            w * da[1] + u * db[1],
+            w * da[2] + u * db[2],
+            w * da[3] + u * db[3],
+        ];
+        let (y, vy) = hermite_scaled(d, q - i as f64, r.h, r.inv_h);
         let rho = r.c * tau;
         let p = DVec3::new(
             r.origin.x + r.horizontal.x * rho,
             y,
             r.origin.z + r.horizontal.y * rho,
         );
-        let t = DVec3::new(r.horizontal.x * r.c, vy, r.horizontal.y * r.c).normalize();
+        let scale = 1.0 / (r.c * r.c + vy * vy).sqrt();
+        let t = DVec3::new(
+            r.horizontal.x * r.c * scale,
+            vy * scale,
+            r.horizontal.y * r.c * scale,
+        );
         (p, t)
     }
 }
