@@ -160,6 +160,58 @@ impl std::ops::AddAssign for Counters {
     }
 }
 
+/// One object's union children that can be nearest within a ball
+/// ([`Sdf::distance_and_near`](crate::scene::sdf::Sdf::distance_and_near)),
+/// kept along a ray's queries: as a ray closes in on a ship of boxes and
+/// cylinders, its next queries fall within twice the distance found (the
+/// steps shrink), where only the hull, say, can be nearest; there the
+/// object's distance is the minimum over those children alone, bit for bit
+/// the full one (every child's distance is 1-Lipschitz).
+#[derive(Clone, Copy, Debug)]
+pub struct NearCache {
+    /// The object (`usize::MAX`: none yet).
+    object: usize,
+    /// Centre of the ball.
+    centre: DVec3,
+    /// Its squared radius.
+    reach2: f64,
+    /// The children that can be nearest in it.
+    mask: u64,
+}
+
+impl Default for NearCache {
+    fn default() -> Self {
+        NearCache {
+            object: usize::MAX,
+            centre: DVec3::ZERO,
+            reach2: -1.0,
+            mask: 0,
+        }
+    }
+}
+
+impl NearCache {
+    /// The distance from `p` to object `o` of `objects`, by the kept children
+    /// when `p` is in their ball, else in full (keeping the new ball).
+    #[inline]
+    fn distance(&mut self, objects: &[SceneObject], o: usize, p: DVec3) -> f64 {
+        let shape = &objects[o].shape;
+        if self.object == o && (p - self.centre).length_squared() <= self.reach2 {
+            return shape.distance_among(p, self.mask);
+        }
+        let (d, near) = shape.distance_and_near(p, |d| 2.0 * d);
+        if let Some((mask, h)) = near {
+            *self = NearCache {
+                object: o,
+                centre: p,
+                reach2: h * h,
+                mask,
+            };
+        }
+        d
+    }
+}
+
 /// Where distances come from.
 #[derive(Clone, Debug)]
 pub enum SceneDistance {
@@ -208,8 +260,17 @@ impl SceneDistance {
     /// `kappa`, with the arc length the ray can travel without meeting a
     /// surface: the free radius itself, or more where an unbounding sphere
     /// reaches further along the ray (grid only).
+    /// `near` keeps what one query learns for the next ones of the same ray
+    /// ([`NearCache`]); the answers are those of a fresh one.
     #[inline]
-    pub fn probe(&self, p: DVec3, t: DVec3, kappa: f64, counters: &mut Counters) -> (Query, f64) {
+    pub fn probe(
+        &self,
+        p: DVec3,
+        t: DVec3,
+        kappa: f64,
+        counters: &mut Counters,
+        near: &mut NearCache,
+    ) -> (Query, f64) {
         match self {
             SceneDistance::Direct(_) => {
                 let q = self.query(p, counters);
@@ -217,7 +278,7 @@ impl SceneDistance {
             }
             SceneDistance::Grid(g) => {
                 counters.queries += 1;
-                g.probe(p, t, kappa, counters)
+                g.probe(p, t, kappa, counters, near)
             }
         }
     }
@@ -415,12 +476,20 @@ impl Grid {
 
     #[inline]
     fn query(&self, p: DVec3, counters: &mut Counters) -> Query {
-        self.probe_cell(p, None, counters).0
+        self.probe_cell(p, None, counters, &mut NearCache::default())
+            .0
     }
 
     #[inline]
-    fn probe(&self, p: DVec3, t: DVec3, kappa: f64, counters: &mut Counters) -> (Query, f64) {
-        let (q, arc) = self.probe_cell(p, Some((t, kappa)), counters);
+    fn probe(
+        &self,
+        p: DVec3,
+        t: DVec3,
+        kappa: f64,
+        counters: &mut Counters,
+        near: &mut NearCache,
+    ) -> (Query, f64) {
+        let (q, arc) = self.probe_cell(p, Some((t, kappa)), counters, near);
         (q, arc.max(q.radius))
     }
 
@@ -433,6 +502,7 @@ impl Grid {
         p: DVec3,
         ray: Option<(DVec3, f64)>,
         counters: &mut Counters,
+        near: &mut NearCache,
     ) -> (Query, f64) {
         if p.y < self.floor {
             counters.object_evaluations += self.objects.len() as u64;
@@ -471,7 +541,7 @@ impl Grid {
         let list = &self.near[cell.start as usize..(cell.start + cell.len) as usize];
         counters.object_evaluations += list.len() as u64;
         for &o in list {
-            let d = self.objects[o as usize].shape.distance(p);
+            let d = near.distance(&self.objects, o as usize, p);
             if d < best.radius {
                 best = Query {
                     radius: d,

@@ -32,7 +32,7 @@
 //! the sphere ([`Air::optics`]). A ray that travels the maximum distance, or whose fate
 //! [`Air::fate`] decides as the sky, shows the sky along its final direction.
 
-use super::accel::{Counters, Query, SceneDistance};
+use super::accel::{Counters, NearCache, Query, SceneDistance};
 use super::air::{Air, Fate};
 use super::paths::{PathTable, TableRay};
 use crate::math::V3;
@@ -345,6 +345,7 @@ impl Marcher<'_> {
         let mut omega = self.omega;
         let mut pending: Option<Pending<P::State>> = None;
         let mut queries = 0u32;
+        let mut near = NearCache::default();
         // Radius at the previous query and the step taken from there.
         let mut last: Option<(f64, f64)> = None;
         loop {
@@ -361,7 +362,9 @@ impl Marcher<'_> {
                 }
                 let (p, v) = path.probe();
                 let t = P::unit(v);
-                let (q, free_arc) = self.distance.probe(p, t, kappa, &mut stats.counters);
+                let (q, free_arc) =
+                    self.distance
+                        .probe(p, t, kappa, &mut stats.counters, &mut near);
                 queries += 1;
                 if let Some(pd) = pending.take()
                     && (q.radius < 0.0 || pd.safe + q.radius < pd.total)

@@ -482,10 +482,11 @@ impl Renderer {
             return true;
         };
         let mut t = t0;
+        let mut near = accel::NearCache::default();
         for _ in 0..512 {
             // A straight ray (curvature 0): the clear box or empty sphere
             // around the point may reach further than the free radius.
-            let (q, free) = self.distance.probe(p + d * t, d, 0.0, counters);
+            let (q, free) = self.distance.probe(p + d * t, d, 0.0, counters, &mut near);
             if q.radius < 1e-4 + 1e-7 * t {
                 return false;
             }

@@ -159,9 +159,52 @@ impl Sdf {
         }
     }
 
-    /// [`Sdf::distance`] with the union that [`Sdf::near_children`] found
-    /// limited to the children of `mask` (the same operations otherwise).
-    pub(super) fn distance_among(&self, p: DVec3, mask: u64) -> f64 {
+    /// [`Sdf::distance`] at `p` and, for a union of 3–64 children under
+    /// translations and rotations (with two, a mask saves too little to pay
+    /// for itself), the children (bits) that can be nearest
+    /// anywhere within `reach(d)` of `p`, d being that distance, with that
+    /// reach: [`Sdf::near_children`]'s rule, where the distance found sizes
+    /// the ball. The distance is the same number [`Sdf::distance`] gives (the
+    /// same children, the same minimum in the same order).
+    pub fn distance_and_near(
+        &self,
+        p: DVec3,
+        reach: impl Fn(f64) -> f64,
+    ) -> (f64, Option<(u64, f64)>) {
+        match self {
+            Sdf::Translate { offset, child } => child.distance_and_near(p - *offset, reach),
+            Sdf::Rotate(r) => r.child.distance_and_near(r.world_to_local * p, reach),
+            Sdf::Union { children } if (3..=64).contains(&children.len()) => {
+                let mut d = [0.0f64; 64];
+                for (di, c) in d.iter_mut().zip(children) {
+                    *di = c.distance(p);
+                }
+                let d = &d[..children.len()];
+                let nearest = d.iter().fold(f64::INFINITY, |m, &di| m.min(di));
+                let h = reach(nearest);
+                if !(nearest.is_finite() && h >= 0.0) {
+                    return (nearest, None);
+                }
+                let limit =
+                    nearest + 2.0 * h + 1e-9 * (1.0 + nearest.abs() + p.abs().max_element());
+                let mask = d
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, di)| {
+                        (**di).partial_cmp(&limit) != Some(std::cmp::Ordering::Greater)
+                    })
+                    .fold(0u64, |m, (i, _)| m | 1 << i);
+                (nearest, Some((mask, h)))
+            }
+            _ => (self.distance(p), None),
+        }
+    }
+
+    /// [`Sdf::distance`] with the union that [`Sdf::near_children`] (or
+    /// [`Sdf::distance_and_near`]) found limited to the children of `mask`
+    /// (the same operations otherwise): the same number wherever the mask
+    /// was found to hold.
+    pub fn distance_among(&self, p: DVec3, mask: u64) -> f64 {
         match self {
             Sdf::Translate { offset, child } => child.distance_among(p - *offset, mask),
             Sdf::Rotate(r) => r.child.distance_among(r.world_to_local * p, mask),
