@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use mirage::medium::LogisticMedium;
-use mirage::render::accel::{Aabb, Grid, SceneDistance};
+use mirage::render::accel::{Aabb, Grid, NearCache, SceneDistance};
 use mirage::render::air::Air;
 use mirage::render::march::{HitTolerance, MarchStats, Marcher, Outcome};
 use mirage::scene::sdf::{SceneObject, sphere_trace};
@@ -294,7 +294,7 @@ fn free_arcs_of_the_grid_are_free() {
         let n = t.any_orthonormal_vector();
         let n = (n * (next() - 0.5) + t.cross(n) * (next() - 0.5)).normalize();
         let kappa = [0.0, 1e-4, 1e-2][k % 3];
-        let (q, arc) = grid.probe(p, t, kappa, &mut counters);
+        let (q, arc) = grid.probe(p, t, kappa, &mut counters, &mut NearCache::default());
         if q.radius <= 0.0 {
             continue;
         }
@@ -358,4 +358,80 @@ fn sun_columns_agree_with_marching_every_object() {
     }
     assert!(shadowed > 500, "only {shadowed} points in shadow");
     assert!(skipped > 5000, "only {skipped} points without a query");
+}
+
+/// A ray keeps the children of a union that can be nearest from one query
+/// to the next ([`NearCache`]): every query along sphere-traced rays closing
+/// in on two ships of boxes and cylinders (and a lighthouse of three parts)
+/// gives the same radius, to the bit, the same object and the same free arc
+/// as with a fresh cache; and the kept masks are used (fewer child
+/// evaluations is not observable, so the test checks the answers only, on
+/// rays that surely reuse: each takes tens of queries near one ship).
+#[test]
+fn a_kept_near_mask_changes_no_query() {
+    let ship = |x: f64, z: f64, deg: f64| {
+        format!(
+            r#"{{ "albedo": [0.5, 0.5, 0.5], "shape": {{ "type": "translate", "offset": [{x}, 0, {z}],
+              "child": {{ "type": "rotate", "axis": [0, 1, 0], "degrees": {deg},
+                "child": {{ "type": "union", "children": [
+                  {{ "type": "box", "center": [0, 3, 0], "half_extents": [5, 3, 40] }},
+                  {{ "type": "box", "center": [0, 8, -14], "half_extents": [4, 2, 8.8] }},
+                  {{ "type": "box", "center": [0, 11, -14], "half_extents": [3, 1.2, 4.8] }},
+                  {{ "type": "cylinder", "center": [0, 13, -4], "radius": 1.3, "half_height": 3.5 }},
+                  {{ "type": "cylinder", "center": [0, 20, 18], "radius": 0.35, "half_height": 14 }},
+                  {{ "type": "cylinder", "center": [0, 17.2, -24], "radius": 0.3, "half_height": 11.2 }}
+                ] }} }} }} }}"#
+        )
+    };
+    let json = format!(
+        r#"[{}, {}, {{ "albedo": [1, 1, 1], "shape": {{ "type": "union", "children": [
+            {{ "type": "cylinder", "center": [30, 12, 260], "radius": 3, "half_height": 12 }},
+            {{ "type": "cylinder", "center": [30, 26, 260], "radius": 2.2, "half_height": 2 }},
+            {{ "type": "sphere", "center": [30, 29, 260], "radius": 1.8 }} ] }} }}]"#,
+        ship(-10.0, 200.0, 70.0),
+        ship(20.0, 320.0, -60.0)
+    );
+    let objs: Vec<SceneObject> = serde_json::from_str(&json).unwrap();
+    let grid = SceneDistance::Grid(Box::new(Grid::build(&objs, 0.0).unwrap()));
+    let mut next = uniform(0x2545_f491_4f6c_dd1d);
+    let mut counters = Default::default();
+    let (mut queries, mut hits) = (0, 0);
+    for k in 0..400 {
+        // From a harbour wall toward a point on one of the objects.
+        let from = DVec3::new(-5.0 + 10.0 * next(), 6.0, 0.0);
+        let target = match k % 3 {
+            0 => DVec3::new(-10.0 + 30.0 * (next() - 0.5), 34.0 * next(), 200.0),
+            1 => DVec3::new(20.0 + 30.0 * (next() - 0.5), 34.0 * next(), 320.0),
+            _ => DVec3::new(30.0 + 8.0 * (next() - 0.5), 32.0 * next(), 260.0),
+        };
+        let t = (target - from).normalize();
+        let kappa = [0.0, 1e-5][k % 2];
+        let mut near = NearCache::default();
+        let mut p = from;
+        for _ in 0..200 {
+            let kept = grid.probe(p, t, kappa, &mut counters, &mut near);
+            let fresh = grid.probe(p, t, kappa, &mut counters, &mut NearCache::default());
+            assert_eq!(
+                kept.0.radius.to_bits(),
+                fresh.0.radius.to_bits(),
+                "ray {k} at {p}"
+            );
+            assert_eq!(kept.0.object, fresh.0.object, "ray {k} at {p}");
+            assert_eq!(kept.1.to_bits(), fresh.1.to_bits(), "ray {k} at {p}");
+            queries += 1;
+            if kept.0.radius < 1e-6 {
+                hits += 1;
+                break;
+            }
+            p += t * kept.0.radius.max(1e-7);
+            if p.z > 400.0 || p.y < 0.0 {
+                break;
+            }
+        }
+    }
+    // The rays did close in on the objects, over many queries each.
+    assert!(
+        hits > 150 && queries > 4000,
+        "{hits} hits, {queries} queries"
+    );
 }
