@@ -642,7 +642,7 @@ impl PathTable {
     ///
     /// The interpolation between the two paths is linear in their Hermite
     /// data, so the data are blended first and one cubic is evaluated (as
-    /// [`PathTable::ground_tau`] does); the tangent's length is
+    /// the ground crossing does); the tangent's length is
     /// √(c² + (dy/dτ)²), the horizontal direction being unit. This is the
     /// sphere tracer's inner loop: one division and one square root.
     #[inline]

@@ -163,8 +163,10 @@ impl Sdf {
     /// translations and rotations (with two, a mask saves too little to pay
     /// for itself), the children (bits) that can be nearest
     /// anywhere within `reach(d)` of `p`, d being that distance, with that
-    /// reach: [`Sdf::near_children`]'s rule, where the distance found sizes
-    /// the ball. The distance is the same number [`Sdf::distance`] gives (the
+    /// reach. A child farther than the nearest by more than 2·reach (plus
+    /// rounding) at `p` is farther at every point of the ball (every
+    /// distance is 1-Lipschitz), the rule [`Sdf::gradient_with_step`] uses,
+    /// here with the ball sized by the distance found. The distance is the same number [`Sdf::distance`] gives (the
     /// same children, the same minimum in the same order).
     pub fn distance_and_near(
         &self,
@@ -200,8 +202,8 @@ impl Sdf {
         }
     }
 
-    /// [`Sdf::distance`] with the union that [`Sdf::near_children`] (or
-    /// [`Sdf::distance_and_near`]) found limited to the children of `mask`
+    /// [`Sdf::distance`] with the union that [`Sdf::distance_and_near`]
+    /// (or the gradient's own search) found limited to the children of `mask`
     /// (the same operations otherwise): the same number wherever the mask
     /// was found to hold.
     pub fn distance_among(&self, p: DVec3, mask: u64) -> f64 {
