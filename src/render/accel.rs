@@ -516,8 +516,17 @@ impl Grid {
                 if outside > 0.0 {
                     self.box_arc(p, t, kappa)
                 } else {
-                    sphere_arc(p, t, kappa, c, cell.empty)
-                        .max(self.clear.arc(ijk, idx, p, t, kappa))
+                    let clear = self.clear.arc(ijk, idx, p, t, kappa);
+                    // The sphere's arc is a chord of it (or of a smaller
+                    // sphere, for a bending ray while κ·r < 1), no longer than
+                    // its diameter but for rounding: where the clear box
+                    // reaches further the sphere cannot win the max, and its
+                    // two square roots are skipped (the same arc, bit for bit).
+                    if clear > 2.000_000_001 * cell.empty && kappa * cell.empty < 1.0 {
+                        clear
+                    } else {
+                        sphere_arc(p, t, kappa, c, cell.empty).max(clear)
+                    }
                 }
             }
             _ => 0.0,
