@@ -24,6 +24,12 @@
 //! From outside the grid's box a ray may travel, in one step, as long as it
 //! surely stays outside one of the box's slabs, bending included.
 //!
+//! A ray's queries share a [`NearCache`]: closing in on a union of boxes and
+//! cylinders (a ship), it keeps the children that can be nearest within twice
+//! the distance found and, while it stays in that ball, evaluates only those.
+//! Every answer is the one a fresh query gives, bit for bit
+//! (`tests/render_sdf.rs` checks it along sphere-traced rays).
+//!
 //! Correctness rests on every object's SDF being a 1-Lipschitz lower bound of
 //! the true distance ([`crate::scene::sdf`]): from a bound d at c, no surface
 //! lies closer than `d − |p − c|` to p.
