@@ -128,77 +128,69 @@ impl Sdf {
     /// For a union of 2–64 children under translations and rotations: the
     /// children (bits) that can be nearest within `h` of `p`.
     pub(super) fn near_children(&self, p: DVec3, h: f64) -> Option<u64> {
+        self.union_near(p, 2, |_| h)?.1.map(|(mask, _)| mask)
+    }
+
+    /// [`Sdf::distance`] at `p` and, for a union of 3–64 children under
+    /// translations and rotations (with two, a mask saves too little to pay
+    /// for itself), the children (bits) that can be nearest anywhere within
+    /// `reach(d)` of `p`, d being that distance, with that reach: the rule of
+    /// [`Sdf::gradient_with_step`], with the ball sized by the distance
+    /// found. The distance is the number [`Sdf::distance`] gives (the same
+    /// children, the same minimum in the same order).
+    pub fn distance_and_near(
+        &self,
+        p: DVec3,
+        reach: impl Fn(f64) -> f64,
+    ) -> (f64, Option<(u64, f64)>) {
+        self.union_near(p, 3, reach)
+            .unwrap_or_else(|| (self.distance(p), None))
+    }
+
+    /// For a union of `min_children`–64 children under translations and
+    /// rotations (`None` for any other shape, with nothing evaluated): its
+    /// distance at `p` and, when that is finite and `reach` of it is not
+    /// negative, the children that can be nearest within that reach of `p`
+    /// (a child farther than the nearest by more than twice the reach is
+    /// farther everywhere in the ball, every distance being 1-Lipschitz),
+    /// with the reach.
+    fn union_near(
+        &self,
+        p: DVec3,
+        min_children: usize,
+        reach: impl Fn(f64) -> f64,
+    ) -> Option<(f64, Option<(u64, f64)>)> {
         match self {
-            Sdf::Translate { offset, child } => child.near_children(p - *offset, h),
-            Sdf::Rotate(r) => r.child.near_children(r.world_to_local * p, h),
-            Sdf::Union { children } if (2..=64).contains(&children.len()) => {
+            Sdf::Translate { offset, child } => child.union_near(p - *offset, min_children, reach),
+            Sdf::Rotate(r) => r
+                .child
+                .union_near(r.world_to_local * p, min_children, reach),
+            Sdf::Union { children } if (min_children..=64).contains(&children.len()) => {
                 let mut d = [0.0f64; 64];
                 for (di, c) in d.iter_mut().zip(children) {
                     *di = c.distance(p);
                 }
                 let d = &d[..children.len()];
                 let nearest = d.iter().copied().fold(f64::INFINITY, f64::min);
-                if !nearest.is_finite() {
-                    return None;
+                let h = reach(nearest);
+                if !(nearest.is_finite() && h >= 0.0) {
+                    return Some((nearest, None));
                 }
                 // 2h by the Lipschitz bound; the rest covers rounding in the
                 // distances and in the rotated points.
-                let reach =
-                    nearest + 2.0 * h + 1e-9 * (1.0 + nearest.abs() + p.abs().max_element());
-                Some(
-                    d.iter()
-                        .enumerate()
-                        // NaN kept: whatever cannot be compared is not left out.
-                        .filter(|(_, di)| {
-                            (**di).partial_cmp(&reach) != Some(std::cmp::Ordering::Greater)
-                        })
-                        .fold(0u64, |m, (i, _)| m | 1 << i),
-                )
-            }
-            _ => None,
-        }
-    }
-
-    /// [`Sdf::distance`] at `p` and, for a union of 3–64 children under
-    /// translations and rotations (with two, a mask saves too little to pay
-    /// for itself), the children (bits) that can be nearest
-    /// anywhere within `reach(d)` of `p`, d being that distance, with that
-    /// reach. A child farther than the nearest by more than 2·reach (plus
-    /// rounding) at `p` is farther at every point of the ball (every
-    /// distance is 1-Lipschitz), the rule [`Sdf::gradient_with_step`] uses,
-    /// here with the ball sized by the distance found. The distance is the same number [`Sdf::distance`] gives (the
-    /// same children, the same minimum in the same order).
-    pub fn distance_and_near(
-        &self,
-        p: DVec3,
-        reach: impl Fn(f64) -> f64,
-    ) -> (f64, Option<(u64, f64)>) {
-        match self {
-            Sdf::Translate { offset, child } => child.distance_and_near(p - *offset, reach),
-            Sdf::Rotate(r) => r.child.distance_and_near(r.world_to_local * p, reach),
-            Sdf::Union { children } if (3..=64).contains(&children.len()) => {
-                let mut d = [0.0f64; 64];
-                for (di, c) in d.iter_mut().zip(children) {
-                    *di = c.distance(p);
-                }
-                let d = &d[..children.len()];
-                let nearest = d.iter().fold(f64::INFINITY, |m, &di| m.min(di));
-                let h = reach(nearest);
-                if !(nearest.is_finite() && h >= 0.0) {
-                    return (nearest, None);
-                }
                 let limit =
                     nearest + 2.0 * h + 1e-9 * (1.0 + nearest.abs() + p.abs().max_element());
                 let mask = d
                     .iter()
                     .enumerate()
+                    // NaN kept: whatever cannot be compared is not left out.
                     .filter(|(_, di)| {
                         (**di).partial_cmp(&limit) != Some(std::cmp::Ordering::Greater)
                     })
                     .fold(0u64, |m, (i, _)| m | 1 << i);
-                (nearest, Some((mask, h)))
+                Some((nearest, Some((mask, h))))
             }
-            _ => (self.distance(p), None),
+            _ => None,
         }
     }
 
