@@ -84,8 +84,7 @@ impl TablePath {
     }
 
     /// Height at node i (τ = i·h), past the last node on the straight
-    /// extension: what [`TablePath::at`] interpolates there, without the
-    /// interpolation.
+    /// extension: what the interpolation gives there, without it.
     #[inline]
     fn node_height(&self, i: usize, h: f64) -> f64 {
         let n = self.nodes.len();
@@ -96,6 +95,19 @@ impl TablePath {
             yl + vl * ((i + 1 - n) as f64 * h)
         }
     }
+}
+
+/// The Hermite data of a table ray between two paths: `w` of `a`'s and
+/// 1 − w of `b`'s (the interpolated curve is linear in them).
+#[inline]
+fn blend(w: f64, a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    let u = 1.0 - w;
+    [
+        w * a[0] + u * b[0],
+        w * a[1] + u * b[1],
+        w * a[2] + u * b[2],
+        w * a[3] + u * b[3],
+    ]
 }
 
 /// Cubic Hermite value and τ-derivative at θ ∈ [0, 1] of interval data
@@ -615,7 +627,7 @@ impl PathTable {
             let lb = w * a.interval_min(i, h) + (1.0 - w) * b.interval_min(i, h);
             if lb < 0.0 {
                 let (da, db) = (a.interval(i, h), b.interval(i, h));
-                let d = [0, 1, 2, 3].map(|j| w * da[j] + (1.0 - w) * db[j]);
+                let d = blend(w, da, db);
                 if let Some(t) = cubic_first_zero(cubic(d, h)) {
                     let tau = (i as f64 + t) * h;
                     return if tau <= r.tau_max { tau } else { f64::INFINITY };
@@ -623,8 +635,7 @@ impl PathTable {
             }
             i += 1;
         }
-        let (da, db) = (a.interval(last, h), b.interval(last, h));
-        let (y, v) = (w * da[0] + (1.0 - w) * db[0], w * da[1] + (1.0 - w) * db[1]);
+        let [y, v, _, _] = blend(w, a.interval(last, h), b.interval(last, h));
         let t0 = last as f64 * h;
         if y < 0.0 {
             return t0;
@@ -651,14 +662,7 @@ impl PathTable {
         let q = tau * r.inv_h;
         // The floor (negatives and NaN give 0) without a libm call.
         let i = q as usize;
-        let (da, db) = (a.interval(i, r.h), b.interval(i, r.h));
-        let (w, u) = (r.w, 1.0 - r.w);
-        let d = [
-            w * da[0] + u * db[0],
-            w * da[1] + u * db[1],
-            w * da[2] + u * db[2],
-            w * da[3] + u * db[3],
-        ];
+        let d = blend(r.w, a.interval(i, r.h), b.interval(i, r.h));
         let (y, vy) = hermite_scaled(d, q - i as f64, r.h, r.inv_h);
         let rho = r.c * tau;
         let p = DVec3::new(
