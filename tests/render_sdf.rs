@@ -319,6 +319,71 @@ fn free_arcs_of_the_grid_are_free() {
     );
 }
 
+/// Near a surface the grid gives the arc along the ray to an object's
+/// bounding box, not only the radius: a ray running beside the side of a bus
+/// or past a pole crosses it in a few long steps, and a ray grazing into a
+/// side steps straight to it. Every such arc is free, bending included.
+#[test]
+fn rays_run_past_objects_beside_them_in_long_free_steps() {
+    let objs: Vec<SceneObject> = serde_json::from_str(
+        r#"[
+      { "albedo": [1, 1, 1], "shape": { "type": "rounded_box", "center": [-1.6, 1.9, 900], "half_extents": [1.25, 1.45, 6], "radius": 0.2 } },
+      { "albedo": [1, 1, 1], "shape": { "type": "translate", "offset": [-1.7, 0, 262],
+          "child": { "type": "rotate", "axis": [0, 1, 0], "degrees": 180, "child": { "type": "union", "children": [
+            { "type": "rounded_box", "center": [0, 0.78, 0], "half_extents": [0.9, 0.45, 2.2], "radius": 0.18 },
+            { "type": "rounded_box", "center": [0, 1.48, -0.15], "half_extents": [0.78, 0.33, 1.15], "radius": 0.2 } ] } } } },
+      { "albedo": [1, 1, 1], "shape": { "type": "cylinder", "center": [-5, 3.5, 500], "radius": 0.08, "half_height": 3.5 } },
+      { "albedo": [1, 1, 1], "shape": { "type": "sphere", "center": [20, 6, 1130], "radius": 3.2 } }
+    ]"#,
+    )
+    .unwrap();
+    let grid = SceneDistance::Grid(Box::new(Grid::build(&objs, 0.0).unwrap()));
+    let mut counters = Default::default();
+    let check_free = |p: DVec3, t: DVec3, kappa: f64, arc: f64| {
+        let n = t.cross(DVec3::X).normalize();
+        for i in 0..=4000 {
+            for bend in [n, -n, t.cross(n)] {
+                let x = on_arc(p, t, bend, kappa, arc * i as f64 / 4000.0);
+                let (d, _) = mirage::scene::sdf::nearest_object(&objs, x);
+                assert!(
+                    d > -1e-9,
+                    "{i}/4000 of the arc {arc} from {p} along {t} is inside: {d}"
+                );
+            }
+        }
+    };
+    for kappa in [0.0, 1e-5, 1e-3] {
+        // Beside the bus's side (x = -0.35), 0.3 m off it, along it.
+        let p = DVec3::new(-0.05, 1.5, 895.0);
+        let (q, arc) = grid.probe(p, DVec3::Z, kappa, &mut counters, &mut NearCache::default());
+        assert!(q.radius < 0.31, "radius {}", q.radius);
+        assert!(arc > 5.0, "κ {kappa}: arc {arc} beside the bus");
+        check_free(p, DVec3::Z, kappa, arc);
+        // Beside the car's body (x = -0.8) and past the pole (x = -4.92).
+        for p in [DVec3::new(-0.5, 0.8, 260.5), DVec3::new(-4.6, 3.0, 499.9)] {
+            let (q, arc) = grid.probe(p, DVec3::Z, kappa, &mut counters, &mut NearCache::default());
+            assert!(
+                arc > 2.0 * q.radius + 0.5,
+                "κ {kappa}: arc {arc}, radius {} at {p}",
+                q.radius
+            );
+            check_free(p, DVec3::Z, kappa, arc);
+        }
+        // Grazing into the bus's side at 1/200: it is 0.3 m away, 60 m
+        // ahead along the ray (into its flat part): one step of most of it.
+        let t = DVec3::new(-0.005, 0.0, 1.0).normalize();
+        let p = DVec3::new(-0.05, 1.9, 840.0);
+        let (q, arc) = grid.probe(p, t, kappa, &mut counters, &mut NearCache::default());
+        let ahead = 0.3 / 0.005 * t.z.recip();
+        assert!(
+            q.radius > 0.29 && arc > 0.5 * ahead && arc < ahead,
+            "κ {kappa}: arc {arc}, radius {}",
+            q.radius
+        );
+        check_free(p, t, kappa, arc);
+    }
+}
+
 /// Shadow rays through the objects seen along the sun give what marching
 /// every object gives.
 #[test]

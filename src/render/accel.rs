@@ -21,6 +21,18 @@
 //!   the corridor's half-width. On the road scene this halved the distance
 //!   queries (68 → 27 a pixel).
 //!
+//! Near a surface the free radius alone makes a ray that runs beside a side
+//! (a car's, a bus's) or past a pole take steps of its distance to it, and a
+//! ray grazing into a side converge on it geometrically (hundreds of
+//! queries). So the grid also gives the arc along the ray that is free of
+//! every object: of the unlisted ones, while the ray stays in the cell grown
+//! by `far`/√3 on every side (within `far` of the cell, where none of them
+//! reaches); of each listed one, while the ray stays outside the object's
+//! bounding box ([`crate::scene::sdf::Sdf::bounding_box`]) or within its
+//! distance. The ray then runs past a side in one step, or straight to the
+//! face it grazes into. On the road scene this took the queries from 27.3 to
+//! 19.6 a pixel and the SDF evaluations from 28.3 to 12.0.
+//!
 //! From outside the grid's box a ray may travel, in one step, as long as it
 //! surely stays outside one of the box's slabs, bending included.
 //!
@@ -34,7 +46,7 @@
 //! the true distance ([`crate::scene::sdf`]): from a bound d at c, no surface
 //! lies closer than `d − |p − c|` to p.
 
-use super::clear::{ClearBoxes, face_root};
+use super::clear::{ClearBoxes, exit, face_root};
 use crate::scene::sdf::SceneObject;
 use glam::{DVec2, DVec3};
 
@@ -87,6 +99,28 @@ impl Aabb {
     #[inline]
     pub fn distance(&self, p: DVec3) -> f64 {
         ((self.min - p).max(p - self.max)).max(DVec3::ZERO).length()
+    }
+
+    /// An arc over which a curve from `p` with unit tangent `t`, bending at
+    /// most `kappa`, surely stays outside the box (0 from inside it):
+    /// staying outside one of its slabs is enough, and a curve at distance d
+    /// outside a face cannot cross it before [`face_root`] of d.
+    #[inline]
+    pub fn outside_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
+        let mut best = 0.0f64;
+        for k in 0..3 {
+            // The distance d outside a face, and the rate toward it.
+            let (d, toward) = if p[k] > self.max[k] {
+                (p[k] - self.max[k], -t[k])
+            } else if p[k] < self.min[k] {
+                (self.min[k] - p[k], t[k])
+            } else {
+                continue;
+            };
+            // The slab is reached no sooner than d is crossed.
+            best = best.max(face_root(d, toward, kappa));
+        }
+        best
     }
 
     /// The parameter interval [t0, t1] (t0 ≥ 0) in which the line `o + t·d`
@@ -342,7 +376,16 @@ pub struct Grid {
     cheap_min: f64,
     /// Boxes of clear cells, for long steps through open air.
     clear: ClearBoxes,
+    /// Each object's bounding box (a hair larger), for the arc a ray can
+    /// run past it.
+    boxes: Vec<Aabb>,
+    /// Longest free arc given in the grid (its diagonal).
+    reach: f64,
 }
+
+/// A little under 1/√3: a box grown by `far`/√3 on every side stays within
+/// `far` of the box it grew from, rounding included.
+const BELOW_INV_SQRT_3: f64 = 0.577;
 
 /// Largest number of cells of a grid.
 pub const MAX_CELLS: usize = 1 << 18;
@@ -450,6 +493,20 @@ impl Grid {
             near,
             cheap_min: 0.25 * cell.min_element(),
             clear,
+            boxes: objects
+                .iter()
+                .map(|o| {
+                    let (min, max) = o.shape.bounding_box();
+                    // A hair of slack: the box is then surely outside the
+                    // solid, whatever the rounding of the SDF.
+                    let slack = DVec3::splat(1e-9 * (1.0 + min.abs().max(max.abs()).max_element()));
+                    Aabb {
+                        min: min - slack,
+                        max: max + slack,
+                    }
+                })
+                .collect(),
+            reach: size.length(),
         })
     }
 
@@ -520,7 +577,9 @@ impl Grid {
         let arc = match ray {
             Some((t, kappa)) if t.is_finite() => {
                 if outside > 0.0 {
-                    self.box_arc(p, t, kappa)
+                    // From outside the grid: as long as the ray surely
+                    // stays outside its box.
+                    self.bounds.outside_arc(p, t, kappa)
                 } else {
                     let clear = self.clear.arc(ijk, idx, p, t, kappa);
                     // The sphere's arc is a chord of it (or of a smaller
@@ -555,6 +614,18 @@ impl Grid {
         };
         let list = &self.near[cell.start as usize..(cell.start + cell.len) as usize];
         counters.object_evaluations += list.len() as u64;
+        // The arc along the ray free of every object (see the module
+        // documentation): of the unlisted ones, while in the cell grown by
+        // `far`/√3 (or within `far` of p); of each listed one, while outside
+        // its bounding box or within its distance.
+        let mut along = match ray {
+            Some((t, kappa)) if t.is_finite() && outside <= 0.0 => {
+                let grow = 0.5 * self.cell + DVec3::splat(cell.far * BELOW_INV_SQRT_3);
+                let unlisted = exit(p, t, kappa, c - grow, c + grow);
+                Some((t, kappa, unlisted.max(cell.far).min(self.reach)))
+            }
+            _ => None,
+        };
         for &o in list {
             let d = near.distance(&self.objects, o as usize, p);
             if d < best.radius {
@@ -563,7 +634,14 @@ impl Grid {
                     object: Some(o as usize),
                 };
             }
+            if let Some((t, kappa, free)) = &mut along
+                && d < *free
+            {
+                let past = self.boxes[o as usize].outside_arc(p, *t, *kappa);
+                *free = free.min(d.max(past));
+            }
         }
+        let arc = along.map_or(arc, |(_, _, free)| arc.max(free));
         if cheap > best.radius {
             // Both are lower bounds; the larger is the better one.
             best = Query {
@@ -572,27 +650,6 @@ impl Grid {
             };
         }
         (best, arc)
-    }
-
-    /// From outside the grid: an arc over which a ray with unit tangent `t`,
-    /// bending at most `kappa`, surely stays outside the box: staying outside
-    /// one of its slabs is enough, and a ray at distance d outside a face
-    /// cannot cross it before [`face_root`] of d.
-    fn box_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
-        let mut best = 0.0f64;
-        for k in 0..3 {
-            // The distance d outside a face, and the rate toward it.
-            let (d, toward) = if p[k] > self.bounds.max[k] {
-                (p[k] - self.bounds.max[k], -t[k])
-            } else if p[k] < self.bounds.min[k] {
-                (self.bounds.min[k] - p[k], t[k])
-            } else {
-                continue;
-            };
-            // The slab is reached no sooner than d is crossed.
-            best = best.max(face_root(d, toward, kappa));
-        }
-        best
     }
 
     /// Largest distance a cell's centre may be from a point of the cell.

@@ -837,6 +837,103 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Outside the bounding box the distance is positive: points just off
+    /// every face (where a loose box would be caught) and farther out.
+    #[test]
+    fn bounding_box_contains_solid(
+        t in trio(), k in 0.05f64..1.5, off in v3(-3.0, 3.0), axis in v3(-1.0, 1.0),
+        deg in -180.0f64..180.0, factor in 0.2f64..5.0, seed in any::<u64>()
+    ) {
+        prop_assume!(axis.length() > 0.05);
+        let [a, b, c] = <[Sdf; 3]>::try_from(t.shapes()).unwrap();
+        let shapes = [
+            a.clone(),
+            b.clone(),
+            c.clone(),
+            Sdf::torus(off, 1.0, 0.4),
+            Sdf::cylinder(off, 0.3, 2.0),
+            Sdf::capsule(off, off + axis * 3.0, 0.3),
+            Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2),
+            Sdf::rotate(axis, deg, Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2)),
+            Sdf::rotate(DVec3::Y, 90.0 * (deg / 90.0).round(), Sdf::cuboid(off, DVec3::new(2.0, 0.3, 0.5))),
+            Sdf::union(vec![a.clone(), b.clone(), c.clone()]),
+            Sdf::intersection(vec![a.clone(), b.clone()]),
+            Sdf::difference(b.clone(), a.clone()),
+            Sdf::smooth_union(vec![a.clone(), b.clone(), c.clone()], k),
+            Sdf::scale(factor, Sdf::rotate(axis, deg, Sdf::translate(off,
+                Sdf::smooth_union(vec![a, b, c], k)))),
+        ];
+        let mut rng = Rng(seed);
+        for s in &shapes {
+            let (lo, hi) = s.bounding_box();
+            prop_assert!(lo.is_finite() && hi.is_finite());
+            let size = (hi - lo).max(DVec3::splat(1e-3));
+            for i in 0..300 {
+                // A point of the box, pushed off one face.
+                let mut p = lo + size * DVec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+                let axis = i % 3;
+                let u = rng.uniform();
+                let gap = size[axis] * (1e-9 + 2.0 * u * u * u);
+                p[axis] = if rng.uniform() < 0.5 { hi[axis] + gap } else { lo[axis] - gap };
+                let d = s.distance(p);
+                prop_assert!(d > 0.0, "{s:?}: d = {d} at {p} outside the bounding box {lo} {hi}");
+            }
+        }
+    }
+}
+
+/// The box of a box is itself, turned by quarter turns too (to rounding);
+/// unions take the box of their children's boxes; planes make it infinite.
+#[test]
+fn bounding_box_is_tight_for_boxes_and_quarter_turns() {
+    let b = Sdf::rounded_box(DVec3::new(1.0, 0.78, 0.0), DVec3::new(0.9, 0.45, 2.2), 0.18);
+    let near = |(lo, hi): (DVec3, DVec3), want: (DVec3, DVec3)| {
+        assert!(
+            (lo - want.0).abs().max_element() < 1e-9 && (hi - want.1).abs().max_element() < 1e-9,
+            "{lo} {hi}, not {want:?}"
+        );
+    };
+    let body = (DVec3::new(0.1, 0.33, -2.2), DVec3::new(1.9, 1.23, 2.2));
+    near(b.bounding_box(), body);
+    // A car turned half round and moved: body and cabin.
+    let car = Sdf::translate(
+        DVec3::new(-1.7, 0.0, 262.0),
+        Sdf::rotate(
+            DVec3::Y,
+            180.0,
+            Sdf::union(vec![
+                Sdf::rounded_box(DVec3::new(0.0, 0.78, 0.0), DVec3::new(0.9, 0.45, 2.2), 0.18),
+                Sdf::rounded_box(
+                    DVec3::new(0.0, 1.48, -0.15),
+                    DVec3::new(0.78, 0.33, 1.15),
+                    0.2,
+                ),
+            ]),
+        ),
+    );
+    near(
+        car.bounding_box(),
+        (DVec3::new(-2.6, 0.33, 259.8), DVec3::new(-0.8, 1.81, 264.2)),
+    );
+    // A quarter turn about y swaps x and z.
+    let turned = Sdf::rotate(
+        DVec3::Y,
+        90.0,
+        Sdf::cuboid(DVec3::ZERO, DVec3::new(2.0, 1.0, 0.5)),
+    );
+    let h = DVec3::new(0.5, 1.0, 2.0);
+    near(turned.bounding_box(), (-h, h));
+    let (lo, hi) = Sdf::union(vec![Sdf::plane(DVec3::Y, 0.0), b.clone()]).bounding_box();
+    assert!(lo.x == f64::NEG_INFINITY && hi.y == f64::INFINITY);
+    near(
+        Sdf::intersection(vec![Sdf::plane(DVec3::Y, 0.0), b]).bounding_box(),
+        body,
+    );
+}
+
 #[test]
 fn bounding_sphere_of_primitives_is_tight_lower_bound() {
     // For exact primitives, d(p) >= |p - c| - r.
