@@ -574,7 +574,7 @@ impl Grid {
         }
         let outside = self.bounds.distance(p);
         let (cell, c, ijk, idx) = self.cell_of(p);
-        let arc = match ray {
+        let mut arc = match ray {
             Some((t, kappa)) if t.is_finite() => {
                 if outside > 0.0 {
                     // From outside the grid: as long as the ray surely
@@ -597,7 +597,40 @@ impl Grid {
             _ => 0.0,
         };
         let cheap = (cell.empty - (p - c).length()).max(outside);
+        let list = &self.near[cell.start as usize..(cell.start + cell.len) as usize];
+        // The arc along the ray free of every object (see the module
+        // documentation): of the unlisted ones, while in the cell grown by
+        // `far`/√3 (or within `far` of p); of each listed one, while outside
+        // its bounding box or within its distance. Only where it may beat
+        // the arc in hand.
+        let mut along = match ray {
+            Some((t, kappa)) if t.is_finite() && outside <= 0.0 => {
+                let grow = 0.5 * self.cell + DVec3::splat(cell.far * BELOW_INV_SQRT_3);
+                // A unit tangent moves at least 1/√3 along some axis, so no
+                // arc stays in the grown cell longer than √3 times its
+                // widest side: a clear box reaching that far wins.
+                if arc >= cell.far.max(3.5 * grow.max_element()) {
+                    None
+                } else {
+                    let unlisted = exit(p, t, kappa, c - grow, c + grow)
+                        .max(cell.far)
+                        .min(self.reach);
+                    (unlisted > arc).then_some((t, kappa, unlisted))
+                }
+            }
+            _ => None,
+        };
         if cheap >= self.cheap_min {
+            // No SDF here: `cheap` bounds every listed object's distance.
+            if let Some((t, kappa, mut free)) = along {
+                for &o in list {
+                    if cheap < free {
+                        let past = self.boxes[o as usize].outside_arc(p, t, kappa);
+                        free = free.min(cheap.max(past));
+                    }
+                }
+                arc = arc.max(free);
+            }
             return (
                 Query {
                     radius: cheap,
@@ -612,20 +645,7 @@ impl Grid {
             radius: cell.far - outside,
             object: None,
         };
-        let list = &self.near[cell.start as usize..(cell.start + cell.len) as usize];
         counters.object_evaluations += list.len() as u64;
-        // The arc along the ray free of every object (see the module
-        // documentation): of the unlisted ones, while in the cell grown by
-        // `far`/√3 (or within `far` of p); of each listed one, while outside
-        // its bounding box or within its distance.
-        let mut along = match ray {
-            Some((t, kappa)) if t.is_finite() && outside <= 0.0 => {
-                let grow = 0.5 * self.cell + DVec3::splat(cell.far * BELOW_INV_SQRT_3);
-                let unlisted = exit(p, t, kappa, c - grow, c + grow);
-                Some((t, kappa, unlisted.max(cell.far).min(self.reach)))
-            }
-            _ => None,
-        };
         for &o in list {
             let d = near.distance(&self.objects, o as usize, p);
             if d < best.radius {
@@ -641,7 +661,9 @@ impl Grid {
                 *free = free.min(d.max(past));
             }
         }
-        let arc = along.map_or(arc, |(_, _, free)| arc.max(free));
+        if let Some((_, _, free)) = along {
+            arc = arc.max(free);
+        }
         if cheap > best.radius {
             // Both are lower bounds; the larger is the better one.
             best = Query {
