@@ -104,7 +104,8 @@ impl Aabb {
     /// An arc over which a curve from `p` with unit tangent `t`, bending at
     /// most `kappa`, surely stays outside the box (0 from inside it):
     /// staying outside one of its slabs is enough, and a curve at distance d
-    /// outside a face cannot cross it before [`face_root`] of d.
+    /// outside a face, closing in at rate r, cannot cross it before the root
+    /// of κs²/2 + r·s = d.
     #[inline]
     pub fn outside_arc(&self, p: DVec3, t: DVec3, kappa: f64) -> f64 {
         let mut best = 0.0f64;
