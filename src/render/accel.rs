@@ -604,33 +604,45 @@ impl Grid {
         // `far`/√3 (or within `far` of p); of each listed one, while outside
         // its bounding box or within its distance. Only where it may beat
         // the arc in hand.
-        let mut along = match ray {
-            Some((t, kappa)) if t.is_finite() && outside <= 0.0 => {
+        // The arc along the ray free of every object (see the module
+        // documentation): of each listed one, while outside its bounding box
+        // or within its distance; then, only where that beats the arc in
+        // hand, of the unlisted ones, while in the cell grown by `far`/√3
+        // (or within `far` of p). Far from surfaces in a clear cell (the
+        // most common query in open air) the clear box reaches further.
+        let far_in_clear = cheap >= self.cheap_min && cell.empty > self.half_diag;
+        let along = match ray {
+            Some((t, kappa)) if t.is_finite() && outside <= 0.0 && !far_in_clear => {
                 let grow = 0.5 * self.cell + DVec3::splat(cell.far * BELOW_INV_SQRT_3);
                 // A unit tangent moves at least 1/√3 along some axis, so no
                 // arc stays in the grown cell longer than √3 times its
                 // widest side: a clear box reaching that far wins.
-                if arc >= cell.far.max(3.5 * grow.max_element()) {
-                    None
-                } else {
-                    let unlisted = exit(p, t, kappa, c - grow, c + grow)
-                        .max(cell.far)
-                        .min(self.reach);
-                    (unlisted > arc).then_some((t, kappa, unlisted))
-                }
+                (arc < cell.far.max(3.5 * grow.max_element())).then_some((t, kappa, grow))
             }
             _ => None,
         };
+        let unlisted = |listed: f64, arc: f64| -> f64 {
+            match along {
+                Some((t, kappa, grow)) if listed > arc => {
+                    let unlisted = exit(p, t, kappa, c - grow, c + grow)
+                        .max(cell.far)
+                        .min(self.reach);
+                    arc.max(listed.min(unlisted))
+                }
+                _ => arc,
+            }
+        };
         if cheap >= self.cheap_min {
             // No SDF here: `cheap` bounds every listed object's distance.
-            if let Some((t, kappa, mut free)) = along {
+            if let Some((t, kappa, _)) = along {
+                let mut free = f64::INFINITY;
                 for &o in list {
                     if cheap < free {
                         let past = self.boxes[o as usize].outside_arc(p, t, kappa);
                         free = free.min(cheap.max(past));
                     }
                 }
-                arc = arc.max(free);
+                arc = unlisted(free, arc);
             }
             return (
                 Query {
@@ -647,6 +659,7 @@ impl Grid {
             object: None,
         };
         counters.object_evaluations += list.len() as u64;
+        let mut free = f64::INFINITY;
         for &o in list {
             let d = near.distance(&self.objects, o as usize, p);
             if d < best.radius {
@@ -655,15 +668,15 @@ impl Grid {
                     object: Some(o as usize),
                 };
             }
-            if let Some((t, kappa, free)) = &mut along
-                && d < *free
+            if let Some((t, kappa, _)) = along
+                && d < free
             {
-                let past = self.boxes[o as usize].outside_arc(p, *t, *kappa);
-                *free = free.min(d.max(past));
+                let past = self.boxes[o as usize].outside_arc(p, t, kappa);
+                free = free.min(d.max(past));
             }
         }
-        if let Some((_, _, free)) = along {
-            arc = arc.max(free);
+        if along.is_some() {
+            arc = unlisted(free, arc.max(best.radius));
         }
         if cheap > best.radius {
             // Both are lower bounds; the larger is the better one.
