@@ -800,6 +800,43 @@ fn transforms_move_surfaces_where_expected() {
 
 // ---- bounding spheres --------------------------------------------------
 
+/// The shapes whose bounding sphere and box are checked: a trio's shapes,
+/// each primitive, turned ones, and every combinator.
+fn bounded_shapes(t: &Trio, k: f64, off: DVec3, axis: DVec3, deg: f64, factor: f64) -> Vec<Sdf> {
+    let [a, b, c] = <[Sdf; 3]>::try_from(t.shapes()).unwrap();
+    vec![
+        a.clone(),
+        b.clone(),
+        c.clone(),
+        Sdf::torus(off, 1.0, 0.4),
+        Sdf::cylinder(off, 0.3, 2.0),
+        Sdf::capsule(off, off + axis * 3.0, 0.3),
+        Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2),
+        Sdf::rotate(
+            axis,
+            deg,
+            Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2),
+        ),
+        Sdf::rotate(
+            DVec3::Y,
+            90.0 * (deg / 90.0).round(),
+            Sdf::cuboid(off, DVec3::new(2.0, 0.3, 0.5)),
+        ),
+        Sdf::union(vec![a.clone(), b.clone(), c.clone()]),
+        Sdf::intersection(vec![a.clone(), b.clone()]),
+        Sdf::difference(b.clone(), a.clone()),
+        Sdf::smooth_union(vec![a.clone(), b.clone(), c.clone()], k),
+        Sdf::scale(
+            factor,
+            Sdf::rotate(
+                axis,
+                deg,
+                Sdf::translate(off, Sdf::smooth_union(vec![a, b, c], k)),
+            ),
+        ),
+    ]
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
@@ -809,21 +846,7 @@ proptest! {
         deg in -180.0f64..180.0, factor in 0.2f64..5.0, seed in any::<u64>()
     ) {
         prop_assume!(axis.length() > 0.05);
-        let [a, b, c] = <[Sdf; 3]>::try_from(t.shapes()).unwrap();
-        let shapes = [
-            a.clone(),
-            b.clone(),
-            c.clone(),
-            Sdf::torus(off, 1.0, 0.4),
-            Sdf::cylinder(off, 0.3, 2.0),
-            Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2),
-            Sdf::union(vec![a.clone(), b.clone(), c.clone()]),
-            Sdf::intersection(vec![a.clone(), b.clone()]),
-            Sdf::difference(b.clone(), a.clone()),
-            Sdf::smooth_union(vec![a.clone(), b.clone(), c.clone()], k),
-            Sdf::scale(factor, Sdf::rotate(axis, deg, Sdf::translate(off,
-                Sdf::smooth_union(vec![a, b, c], k)))),
-        ];
+        let shapes = bounded_shapes(&t, k, off, axis, deg, factor);
         let mut rng = Rng(seed);
         for s in &shapes {
             let (center, radius) = s.bounding_sphere();
@@ -848,24 +871,7 @@ proptest! {
         deg in -180.0f64..180.0, factor in 0.2f64..5.0, seed in any::<u64>()
     ) {
         prop_assume!(axis.length() > 0.05);
-        let [a, b, c] = <[Sdf; 3]>::try_from(t.shapes()).unwrap();
-        let shapes = [
-            a.clone(),
-            b.clone(),
-            c.clone(),
-            Sdf::torus(off, 1.0, 0.4),
-            Sdf::cylinder(off, 0.3, 2.0),
-            Sdf::capsule(off, off + axis * 3.0, 0.3),
-            Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2),
-            Sdf::rotate(axis, deg, Sdf::rounded_box(off, DVec3::new(1.0, 0.3, 0.5), 0.2)),
-            Sdf::rotate(DVec3::Y, 90.0 * (deg / 90.0).round(), Sdf::cuboid(off, DVec3::new(2.0, 0.3, 0.5))),
-            Sdf::union(vec![a.clone(), b.clone(), c.clone()]),
-            Sdf::intersection(vec![a.clone(), b.clone()]),
-            Sdf::difference(b.clone(), a.clone()),
-            Sdf::smooth_union(vec![a.clone(), b.clone(), c.clone()], k),
-            Sdf::scale(factor, Sdf::rotate(axis, deg, Sdf::translate(off,
-                Sdf::smooth_union(vec![a, b, c], k)))),
-        ];
+        let shapes = bounded_shapes(&t, k, off, axis, deg, factor);
         let mut rng = Rng(seed);
         for s in &shapes {
             let (lo, hi) = s.bounding_box();
