@@ -36,6 +36,7 @@ use super::model::{Model, Term};
 use crate::medium::air::{AirHotSpot, Exponential, Step};
 use crate::medium::{HotSpot, Inversion, Medium};
 use crate::pair::PointPair;
+use crate::trace::Earth;
 
 /// How many of the worst-fitting pairs seed hot spots.
 pub const WORST_PAIRS: usize = 3;
@@ -119,7 +120,9 @@ fn horizontal(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// Where `pair`'s launch line meets the ground before the target's distance,
 /// else its lowest point there: (x, z, horizontal distance from the origin).
-pub fn lowest_ground_point(pair: &PointPair) -> (f64, f64, f64) {
+/// Over the round earth the ground is the sphere: the line meets it where
+/// |o + t·u − c| = R, or is lowest where it passes closest to the centre.
+pub fn lowest_ground_point(pair: &PointPair, earth: Earth) -> (f64, f64, f64) {
     let o = pair.origin;
     let d = [
         pair.through[0] - o[0],
@@ -131,25 +134,47 @@ pub fn lowest_ground_point(pair: &PointPair) -> (f64, f64, f64) {
     if dh <= 0.0 {
         return (o[0], o[2], 0.0);
     }
-    // Parameter t along d per metre of horizontal distance.
-    let per_metre = 1.0 / dh;
-    let s = if d[1] < 0.0 {
-        (-o[1] / d[1] / per_metre).min(reach)
-    } else {
-        // A rising line is lowest at the origin; a spot under the observer
-        // would bend nothing, so take the middle of its way instead.
-        0.5 * reach
+    // Horizontal distance s along the line, per unit of d: dh.
+    let s = match earth {
+        Earth::Flat => {
+            if d[1] < 0.0 {
+                (-o[1] / d[1] * dh).min(reach)
+            } else {
+                // A rising line is lowest at the origin; a spot under the
+                // observer would bend nothing, so take the middle of its way.
+                0.5 * reach
+            }
+        }
+        Earth::Round { radius } => {
+            // |q + t·d|² = R² with q = o − c: t² |d|² + 2t q·d + |q|² − R² = 0.
+            let q = [o[0], o[1] + radius, o[2]];
+            let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let b = (q[0] * d[0] + q[1] * d[1] + q[2] * d[2]) / dd;
+            let c = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] - radius * radius) / dd;
+            let disc = b * b - c;
+            let t = if b < 0.0 && disc >= 0.0 {
+                // The first crossing: −b − √(b² − c), written without the
+                // cancellation of two near numbers (c = t₁·t₂).
+                c / (-b + disc.sqrt())
+            } else if b < 0.0 {
+                // Closest to the centre, above the ground.
+                -b
+            } else {
+                0.5 * reach / dh
+            };
+            (t * dh).min(reach)
+        }
     };
-    let t = s * per_metre;
+    let t = s / dh;
     (o[0] + t * d[0], o[2] + t * d[2], s)
 }
 
 /// The candidates for the next step from `model`, whose pairs have residual
 /// norms `misfit` (one per pair, in order).
-pub fn propose(model: &Model, pairs: &[PointPair], misfit: &[f64]) -> Vec<Candidate> {
+pub fn propose(model: &Model, pairs: &[PointPair], misfit: &[f64], earth: Earth) -> Vec<Candidate> {
     let scene = Scene::of(pairs);
     let mut out = Vec::new();
-    let centres = worst_centres(pairs, misfit);
+    let centres = worst_centres(pairs, misfit, earth);
     match &model.medium {
         Medium::Logistic(m) => {
             let s = m.amplitude_sum().max(f64::MIN_POSITIVE);
@@ -271,13 +296,13 @@ fn surface_seeds(model: &Model, scene: &Scene) -> Vec<Model> {
 
 /// The seed centres of a hot spot: under the [`WORST_PAIRS`] worst pairs'
 /// launch lines (see [`lowest_ground_point`]), one per place.
-fn worst_centres(pairs: &[PointPair], misfit: &[f64]) -> Vec<(f64, f64, f64)> {
+fn worst_centres(pairs: &[PointPair], misfit: &[f64], earth: Earth) -> Vec<(f64, f64, f64)> {
     let mut order: Vec<usize> = (0..pairs.len()).collect();
     // Worst first; the index breaks ties, so the order is reproducible.
     order.sort_by(|&i, &j| misfit[j].total_cmp(&misfit[i]).then(i.cmp(&j)));
     let mut centres: Vec<(f64, f64, f64)> = Vec::new();
     for &i in order.iter().take(WORST_PAIRS) {
-        let c = lowest_ground_point(&pairs[i]);
+        let c = lowest_ground_point(&pairs[i], earth);
         // Two worst pairs through the same place seed one centre.
         let near = centres
             .iter()
@@ -373,14 +398,44 @@ mod tests {
             weight: 1.0,
             wavelength: None,
         };
-        let (x, z, d) = lowest_ground_point(&pair);
+        let (x, z, d) = lowest_ground_point(&pair, Earth::Flat);
         assert!(x.abs() < 1e-12 && (z - 100.0).abs() < 1e-9 && (d - 100.0).abs() < 1e-9);
         // Beyond the target's distance the line is cut there.
         let far = PointPair {
             through: [30.0, 1.4, 40.0],
             ..pair
         };
-        let (x, z, d) = lowest_ground_point(&far);
+        let (x, z, d) = lowest_ground_point(&far, Earth::Flat);
         assert!((d - 300.0).abs() < 1e-9 && (x - 180.0).abs() < 1e-9 && (z - 240.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn over_the_round_earth_a_falling_line_meets_the_sphere() {
+        // From 2 m, toward the point of the sphere 1 km out: the line meets
+        // the sphere there (it is a chord from 2 m up to the surface).
+        let r: f64 = 6_371_000.0;
+        let phi = 1000.0 / r;
+        let on = [0.0, r * phi.cos() - r, r * phi.sin()];
+        let pair = PointPair {
+            origin: [0.0, 2.0, 0.0],
+            through: on,
+            target: [0.0, -1.0, 3000.0],
+            weight: 1.0,
+            wavelength: None,
+        };
+        let (x, z, d) = lowest_ground_point(&pair, Earth::Round { radius: r });
+        assert!(x.abs() < 1e-9 && (z - on[2]).abs() < 1e-6, "{z}");
+        assert!((d - on[2]).abs() < 1e-6);
+        // The flat ground would put it farther: the line reaches y = 0 later.
+        let (_, _, flat) = lowest_ground_point(&pair, Earth::Flat);
+        assert!(flat > d + 100.0, "{flat}");
+        // A level line stays above the sphere: lowest at its start, so the
+        // middle of its way is taken (as for a rising line on flat ground).
+        let level = PointPair {
+            through: [0.0, 2.0, 500.0],
+            ..pair
+        };
+        let (_, _, d) = lowest_ground_point(&level, Earth::Round { radius: r });
+        assert!((d - 1500.0).abs() < 1e-6, "{d}");
     }
 }

@@ -4,25 +4,49 @@
 //!
 //! # Algorithm
 //!
-//! 1. Fit the starting model (the problem's medium and `free`).
+//! A stepwise search that only ever goes down the criterion:
+//!
+//! 1. Fit the starting model (the problem's medium and `free`; a logistic
+//!    start that frees every amplitude has one held to fix the gauge) and
+//!    settle it ([`fits::Fitter::settle`]: what ran away or is undetermined
+//!    is held at its start and the rest fitted again).
 //! 2. Propose candidates ([`candidates`]), each with several seeds. The
 //!    logistic model: the inversion, if the medium has none, and one more hot
 //!    spot. Real air: the surface layer (`air.temperature.exponential`) and
 //!    the step aloft (`air.temperature.inversion`), each if absent and the
 //!    temperature is no table, and one more hot spot in kelvins.
 //! 3. Fit every (candidate, seed) with Levenberg–Marquardt
-//!    ([`crate::fit::solve::run_lm`]), all of them at once with rayon. Each
-//!    fit is deterministic and independent of the thread count (the residual
-//!    map's own parallel split is fixed), results are collected in input
-//!    order, and every choice is by (value, index): the grown model is the
-//!    same bit for bit on any number of threads.
-//! 4. Keep the candidate whose best seed lowers the criterion most; if none
-//!    lowers it, stop.
-//! 5. Prune: a grown term with a parameter the pairs do not determine
-//!    ([`crate::fit::identify`]) is dropped, as is one whose removal lowers the
-//!    criterion (each refitted from the current values without it).
+//!    ([`crate::fit::solve::run_lm`]), all of them at once with rayon, and
+//!    settle each candidate's best seed: a grown parameter that runs away
+//!    makes the candidate a failure, an undetermined one is held at its seed.
+//!    Each fit is deterministic and independent of the thread count (the
+//!    residual map's own parallel split is fixed), results are collected in
+//!    input order, and every choice is by (value, index): the grown model is
+//!    the same bit for bit on any number of threads.
+//! 4. **Add** the candidate with the lowest criterion, only if that is below
+//!    the current model's; if none is, stop. Candidates within
+//!    [`INDISTINGUISHABLE`] of the lowest are evidence too close to call:
+//!    of those, the one with the fewest free parameters is taken (a cold
+//!    surface layer, say, over a warm step just above the ground, which the
+//!    pairs may see alike).
+//! 5. **Drop**: each older grown term is taken out in turn (the others
+//!    refitted from their current values, then settled); the removal with the
+//!    lowest criterion is made only if that is below the current model's.
+//!    Repeat until no removal lowers it. A term the pairs cannot determine is
+//!    not dropped for that: its undetermined parameters are held, and it
+//!    goes only if the criterion without it is lower, i.e. the fit loses less
+//!    than the penalty of its parameters.
 //! 6. Stop when the fit reaches the noise floor, when `max_terms` terms were
 //!    added, or after [`MAX_STEPS`] steps; else go to 2.
+//!
+//! Each model added, and the one kept at the end, is polished: fitted on
+//! with the problem's own iteration limit (candidates stop at 100) and
+//! settled, kept if that lowers the criterion.
+//!
+//! Every accepted step lowers the criterion, so the model kept is the best
+//! one visited, no sequence of steps can return to a model (no cycle), and a
+//! model already fitted from the same start is never fitted again (the fits
+//! are remembered).
 //!
 //! # Criterion
 //!
@@ -39,6 +63,7 @@
 //! and a spurious hot spot (5 parameters, which can always absorb some noise)
 //! lowers χ² by about its p — by chance often more than 2p, rarely more than
 //! p·ln m. BIC is consistent (the true model wins as m grows); AIC is not.
+//! Held parameters are not free: they count nothing in p.
 //!
 //! The noise floor: at the true model χ² follows a χ² law with m − p degrees
 //! of freedom, so a fit with χ² ≤ (m − p) + 2·√(2(m − p)) (two standard
@@ -49,8 +74,9 @@
 //!
 //! A term no pair's ray passes through changes no endpoint: it is neither
 //! proposed nor kept. Hot spots are seeded only under the worst-fitting
-//! pairs' launch lines: a spot whose rays already fit well after an earlier
-//! term bent them is not proposed. A grown hot spot's rim sharpness is fixed
+//! pairs' launch lines (where they meet the ground, flat or round): a spot
+//! whose rays already fit well after an earlier term bent them is not
+//! proposed. A grown hot spot's rim sharpness is fixed
 //! ([`candidates::GROWN_EDGE`]). Real air grows only its temperature:
 //! the surface layer, the step aloft and hot spots, never a lapse, a table,
 //! the pressure or the humidity, and nothing but hot spots beside a table; a
@@ -59,19 +85,20 @@
 //! do not grow.
 
 pub mod candidates;
+pub mod criterion;
+pub mod fits;
 pub mod model;
 pub mod report;
 
-pub use model::{Model, Term};
-pub use report::{CandidateReport, GrowReport, GrowStep};
+pub use criterion::{Criterion, Noise};
+pub use fits::Fitted;
+pub use model::{Held, Model, Term};
+pub use report::{CandidateReport, GrowReport, GrowStep, HeldReport};
 
-use super::identify;
-use super::objective::Objective;
-use super::solve::run_lm;
 use crate::error::{Error, Result};
 use crate::medium::Medium;
 use crate::problem::{GrowSettings, Problem, SolverSettings};
-use rayon::prelude::*;
+use fits::Fitter;
 use std::time::Instant;
 
 /// The most steps (additions and drops together) a growth makes.
@@ -79,127 +106,6 @@ pub const MAX_STEPS: usize = 16;
 
 /// Iteration limit of one candidate fit (at most the problem's).
 const CANDIDATE_ITERATIONS: u64 = 100;
-
-/// What the criterion knows of the endpoint noise.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Noise {
-    /// σ unknown: estimated from the residuals.
-    Unknown,
-    /// One σ (m) for every pair: χ² = 2F/σ².
-    Uniform(f64),
-    /// A σᵢ per pair: χ² = Σᵢ kᵢ·|rᵢ|² with kᵢ = 1/(wᵢσᵢ)² held here, one per
-    /// pair (0 for a pair of weight 0, whose residual is 0).
-    PerPair(Vec<f64>),
-}
-
-/// The information criterion of least squares with endpoint noise σ.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Criterion {
-    /// The noise.
-    pub noise: Noise,
-    /// Residual components m.
-    pub m: usize,
-}
-
-impl Criterion {
-    /// The criterion of `problem`'s pairs with the global σ `noise`
-    /// (`--noise`, `solver.noise`): per-pair σᵢ when some pair carries one
-    /// (then every pair must have one, its own or the global one).
-    pub fn of(problem: &Problem, noise: Option<f64>) -> Result<Criterion> {
-        let m = 2 * problem.pairs.len();
-        let own = |i: usize| problem.pair_noise.get(i).copied().flatten();
-        let with_own = (0..problem.pairs.len())
-            .filter(|&i| own(i).is_some())
-            .count();
-        if with_own == 0 {
-            let noise = noise.map_or(Noise::Unknown, Noise::Uniform);
-            return Ok(Criterion { noise, m });
-        }
-        let mut k = Vec::with_capacity(problem.pairs.len());
-        for (i, pair) in problem.pairs.iter().enumerate() {
-            let Some(sigma) = own(i).or(noise) else {
-                return Err(Error::input(
-                    &problem.source,
-                    "solver.noise",
-                    format!(
-                        "{with_own} of {} pairs carry their own `noise` but pairs[{i}] does not: give every pair a `noise`, or a σ for the rest in `solver.noise` (or --noise)",
-                        problem.pairs.len()
-                    ),
-                ));
-            };
-            let ws = pair.weight * sigma;
-            k.push(if pair.weight > 0.0 {
-                1.0 / (ws * ws)
-            } else {
-                0.0
-            });
-        }
-        Ok(Criterion {
-            noise: Noise::PerPair(k),
-            m,
-        })
-    }
-
-    /// The criterion in words.
-    pub fn describe(&self) -> String {
-        match &self.noise {
-            Noise::Uniform(s) => format!("BIC, σ = {s} m known: χ² + p·ln m, χ² = 2F/σ²"),
-            Noise::PerPair(_) => "BIC, σᵢ per pair known: χ² + p·ln m, χ² = Σ|rᵢ|²/(wᵢσᵢ)²".into(),
-            Noise::Unknown => "BIC, σ estimated: m·ln(2F/m) + p·ln m".into(),
-        }
-    }
-
-    /// Whether χ² needs each pair's |rᵢ|², not only F.
-    pub fn needs_pairs(&self) -> bool {
-        matches!(self.noise, Noise::PerPair(_))
-    }
-
-    /// χ² of a fit with objective `f` and per-pair |rᵢ|² `pair_sq` (read only
-    /// with per-pair σᵢ), if σ is known.
-    pub fn chi2(&self, f: f64, pair_sq: &[f64]) -> Option<f64> {
-        match &self.noise {
-            Noise::Unknown => None,
-            Noise::Uniform(s) => Some(2.0 * f / (s * s)),
-            Noise::PerPair(_) if !f.is_finite() => Some(f64::INFINITY),
-            Noise::PerPair(k) => {
-                let c: f64 = k.iter().zip(pair_sq).map(|(k, r2)| k * r2).sum();
-                Some(if c.is_finite() { c } else { f64::INFINITY })
-            }
-        }
-    }
-
-    /// The criterion of a fit with objective `f`, χ² `chi2` (from
-    /// [`Criterion::chi2`]) and `p` free parameters.
-    pub fn value(&self, f: f64, chi2: Option<f64>, p: usize) -> f64 {
-        let m = self.m as f64;
-        let penalty = p as f64 * m.ln();
-        match chi2 {
-            Some(c) => c + penalty,
-            None => m * (2.0 * f / m).max(f64::MIN_POSITIVE).ln() + penalty,
-        }
-    }
-
-    /// Whether χ² is within the noise floor (`None` when σ is unknown).
-    pub fn at_floor(&self, chi2: Option<f64>, p: usize) -> Option<bool> {
-        let dof = self.m.saturating_sub(p).max(1) as f64;
-        chi2.map(|c| c <= dof + 2.0 * (2.0 * dof).sqrt())
-    }
-}
-
-/// A fitted model.
-#[derive(Clone, Debug)]
-pub struct Fitted {
-    /// The model at its fitted values.
-    pub model: Model,
-    /// The model the fit started from (its seed).
-    pub start: Model,
-    /// F (m²).
-    pub objective: f64,
-    /// χ², when σ is known.
-    pub chi2: Option<f64>,
-    /// The criterion.
-    pub criterion: f64,
-}
 
 /// The grown model and the account of how it grew.
 #[derive(Clone, Debug)]
@@ -218,61 +124,6 @@ fn candidate_settings(settings: &SolverSettings) -> SolverSettings {
     }
 }
 
-/// Fits `model` from its current values; a failed run counts as F = ∞.
-fn fit_model(
-    problem: &Problem,
-    model: &Model,
-    settings: &SolverSettings,
-    criterion: &Criterion,
-) -> Result<Fitted> {
-    let objective = Objective::new(
-        model.medium.clone(),
-        model.free.clone(),
-        problem.pairs.clone(),
-        problem.trace,
-    );
-    let x0 = model.x();
-    let (x, f) = if x0.is_empty() {
-        (x0, objective.cost(&[]))
-    } else {
-        // A seed whose run fails (its first step off the model's domain, say)
-        // is a seed that did not fit: F = ∞, and the other seeds decide.
-        match run_lm(&objective, settings, &model.bounds, &x0, "grow", None) {
-            Ok(run) => (run.end, run.objective),
-            // Ctrl-C is no failed seed: it stops the growth.
-            Err(Error::Interrupted) => return Err(Error::Interrupted),
-            Err(_) => (x0, f64::INFINITY),
-        }
-    };
-    let f = if f.is_finite() { f } else { f64::INFINITY };
-    let pair_sq = if criterion.needs_pairs() && f.is_finite() {
-        pair_norms(&objective.residuals(&x).0)
-    } else {
-        vec![]
-    };
-    let chi2 = criterion.chi2(f, &pair_sq);
-    Ok(Fitted {
-        start: model.clone(),
-        model: model.at(&x),
-        objective: f,
-        chi2,
-        criterion: criterion.value(f, chi2, model.free.len()),
-    })
-}
-
-/// Fits every model in parallel; results in input order.
-fn fit_all(
-    problem: &Problem,
-    models: &[Model],
-    settings: &SolverSettings,
-    criterion: &Criterion,
-) -> Result<Vec<Fitted>> {
-    models
-        .par_iter()
-        .map(|m| fit_model(problem, m, settings, criterion))
-        .collect()
-}
-
 /// The index of the lowest `key`, the earliest on ties.
 fn argmin(keys: impl IntoIterator<Item = f64>) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
@@ -282,50 +133,6 @@ fn argmin(keys: impl IntoIterator<Item = f64>) -> Option<usize> {
         }
     }
     best.map(|(i, _)| i)
-}
-
-/// Per pair, |rᵢ|² of the residual vector `r` (three components a pair).
-fn pair_norms(r: &nalgebra::DVector<f64>) -> Vec<f64> {
-    r.as_slice()
-        .chunks(3)
-        .map(|c| c.iter().map(|v| v * v).sum::<f64>())
-        .collect()
-}
-
-/// Per pair, |rᵢ| at the fitted model.
-fn misfits(problem: &Problem, fitted: &Fitted) -> Vec<f64> {
-    let objective = Objective::new(
-        fitted.model.medium.clone(),
-        vec![],
-        problem.pairs.clone(),
-        problem.trace,
-    );
-    let (r, _) = objective.residuals(&[]);
-    pair_norms(&r).into_iter().map(f64::sqrt).collect()
-}
-
-/// The grown term of `fitted` with a parameter the pairs do not determine.
-fn undetermined_term(problem: &Problem, fitted: &Fitted) -> Option<Term> {
-    let model = &fitted.model;
-    if model.free.is_empty() || model.grown.is_empty() {
-        return None;
-    }
-    let objective = Objective::new(
-        model.medium.clone(),
-        model.free.clone(),
-        problem.pairs.clone(),
-        problem.trace,
-    );
-    let x = model.x();
-    let (_, jac) = objective.jacobian(&x);
-    let ident = identify::analyse(&jac, &x, &model.free, fitted.objective);
-    model.grown.iter().copied().find(|t| {
-        model
-            .free
-            .iter()
-            .zip(&ident.params)
-            .any(|(p, v)| t.owns(*p) && !v.determined)
-    })
 }
 
 /// The record of a step.
@@ -353,26 +160,131 @@ pub fn unsupported(medium: &Medium) -> Option<String> {
     crate::problem::grow_unsupported(medium)
 }
 
-/// The starting model of `problem`: its medium and free parameters.
+/// The starting model of `problem`: its medium and free parameters (the
+/// logistic gauge fixed, [`Model::start`]).
 fn start_model(problem: &Problem) -> Result<Model> {
     match unsupported(&problem.medium) {
-        None => Ok(Model {
-            medium: problem.medium.clone(),
-            free: problem.free.clone(),
-            bounds: problem.bounds.clone(),
-            grown: vec![],
-        }),
+        None => Ok(Model::start(
+            problem.medium.clone(),
+            problem.free.clone(),
+            problem.bounds.clone(),
+        )),
         Some(reason) => Err(Error::input(&problem.source, "solver.grow", reason)),
     }
+}
+
+/// The candidates' reports, and the one chosen with its settled fit.
+type Choice = (Vec<CandidateReport>, Option<(Term, Fitted)>);
+
+/// The best (lowest criterion) of `fits`, settled, with the report of each
+/// candidate term; `None` when nothing was tried.
+fn best_candidate(
+    fitter: &Fitter,
+    cands: &[candidates::Candidate],
+    results: &[Fitted],
+) -> Result<Choice> {
+    let mut reports = Vec::new();
+    let mut best_of: Vec<(Term, Fitted)> = Vec::new();
+    let mut first = 0;
+    for c in cands {
+        let own = &results[first..first + c.seeds.len()];
+        first += c.seeds.len();
+        let Some(b) = argmin(own.iter().map(|f| f.criterion)) else {
+            continue;
+        };
+        let settled = fitter.settle(own[b].clone())?;
+        reports.push(CandidateReport {
+            term: c.term.name(&c.seeds[0].medium),
+            seeds: own.len(),
+            best_seed: b,
+            objective: settled.objective,
+            criterion: settled.criterion,
+            held: settled.model.held.len() - c.seeds[b].held.len(),
+        });
+        best_of.push((c.term, settled));
+    }
+    Ok((reports, simplest_of_best(best_of)))
+}
+
+/// Criterion differences below this are evidence "not worth more than a
+/// bare mention" (Kass & Raftery 1995, on BIC): between candidates that
+/// close, the one with fewer free parameters is taken.
+pub const INDISTINGUISHABLE: f64 = 2.0;
+
+/// Of `fits`, the one with the fewest free parameters among those within
+/// [`INDISTINGUISHABLE`] of the lowest criterion; the lowest criterion among
+/// those, then the earliest.
+fn simplest_of_best<T>(mut fits: Vec<(T, Fitted)>) -> Option<(T, Fitted)> {
+    let best = fits
+        .iter()
+        .map(|(_, f)| f.criterion)
+        .fold(f64::INFINITY, f64::min);
+    let near = |f: &Fitted| f.criterion <= best + INDISTINGUISHABLE;
+    let fewest = fits
+        .iter()
+        .filter(|(_, f)| near(f))
+        .map(|(_, f)| f.model.free.len())
+        .min()?;
+    let i = argmin(fits.iter().map(|(_, f)| {
+        if near(f) && f.model.free.len() == fewest {
+            f.criterion
+        } else {
+            f64::INFINITY
+        }
+    }))?;
+    Some(fits.swap_remove(i))
+}
+
+/// The best removal of one older grown term from `current`, settled, if it
+/// lowers the criterion.
+fn best_drop(fitter: &Fitter, current: &Fitted) -> Result<Option<(String, Fitted)>> {
+    // The term added last lowered the criterion: only older ones may go.
+    let grown = &current.model.grown;
+    let older: Vec<Term> = grown
+        .iter()
+        .copied()
+        .take(grown.len().saturating_sub(1))
+        .collect();
+    if older.is_empty() {
+        return Ok(None);
+    }
+    let without: Vec<Model> = older.iter().map(|t| current.model.without(*t)).collect();
+    let refits = fitter.fit_all(&without)?;
+    let mut settled = Vec::with_capacity(refits.len());
+    for f in refits {
+        settled.push(fitter.settle(f)?);
+    }
+    Ok(match argmin(settled.iter().map(|f| f.criterion)) {
+        Some(i) if settled[i].criterion < current.criterion => {
+            Some((older[i].name(&current.model.medium), settled.swap_remove(i)))
+        }
+        _ => None,
+    })
+}
+
+/// `fitted` fitted on with the problem's own iteration limit (candidates
+/// stop at [`CANDIDATE_ITERATIONS`]) and settled; kept only if that lowers
+/// the criterion.
+fn polish(problem: &Problem, full: &Fitter, fitted: Fitted) -> Result<Fitted> {
+    if problem.solver.max_iterations <= CANDIDATE_ITERATIONS || fitted.model.free.is_empty() {
+        return Ok(fitted);
+    }
+    let polished = full.settle(full.fit(&fitted.model)?)?;
+    Ok(if polished.criterion < fitted.criterion {
+        polished
+    } else {
+        fitted
+    })
 }
 
 /// Grows `problem`'s model as `settings` say (see the module doc).
 pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
     let started = Instant::now();
     let criterion = Criterion::of(problem, settings.noise)?;
-    let lm = candidate_settings(&problem.solver);
-    let mut fits = 1;
-    let mut current = fit_model(problem, &start_model(problem)?, &lm, &criterion)?;
+    let fitter = Fitter::new(problem, candidate_settings(&problem.solver), &criterion);
+    let full = Fitter::new(problem, problem.solver, &criterion);
+    let start = start_model(problem)?;
+    let mut current = fitter.settle(fitter.fit(&start)?)?;
     let mut steps = vec![step_record(0, "start".into(), &current, vec![])];
     let stop_reason = loop {
         let p = current.model.free.len();
@@ -385,34 +297,13 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
         if steps.len() > MAX_STEPS {
             break format!("{MAX_STEPS} steps made: the limit");
         }
-        let misfit = misfits(problem, &current);
-        let cands = candidates::propose(&current.model, &problem.pairs, &misfit);
+        let misfit = fitter.misfits(&current);
+        let cands =
+            candidates::propose(&current.model, &problem.pairs, &misfit, problem.trace.earth);
         let seeds: Vec<Model> = cands.iter().flat_map(|c| c.seeds.clone()).collect();
-        let results = fit_all(problem, &seeds, &lm, &criterion)?;
-        fits += results.len();
-        let mut reports = Vec::new();
-        let mut best_of = Vec::new();
-        let mut first = 0;
-        for c in &cands {
-            let own = &results[first..first + c.seeds.len()];
-            first += c.seeds.len();
-            let Some(b) = argmin(own.iter().map(|f| f.criterion)) else {
-                continue;
-            };
-            reports.push(CandidateReport {
-                term: c.term.name(&c.seeds[0].medium),
-                seeds: own.len(),
-                best_seed: b,
-                objective: own[b].objective,
-                criterion: own[b].criterion,
-            });
-            best_of.push((c.term, own[b].clone()));
-        }
-        let chosen = argmin(best_of.iter().map(|(_, f)| f.criterion));
-        let Some((term, better)) = chosen
-            .map(|i| best_of[i].clone())
-            .filter(|(_, f)| f.criterion < current.criterion)
-        else {
+        let results = fitter.fit_all(&seeds)?;
+        let (reports, chosen) = best_candidate(&fitter, &cands, &results)?;
+        let Some((term, better)) = chosen.filter(|(_, f)| f.criterion < current.criterion) else {
             // Record what was tried, then stop.
             let step = steps.len();
             let mut last = step_record(step, "none kept".into(), &current, reports);
@@ -420,57 +311,39 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
             steps.push(last);
             break "no candidate term lowers the criterion".to_string();
         };
-        current = better;
+        current = polish(problem, &full, better)?;
         steps.push(step_record(
             steps.len(),
             format!("add {}", term.name(&current.model.medium)),
             &current,
             reports,
         ));
-        // Prune, one term at a time, until nothing more goes.
+        // Drop, one term at a time, while a removal lowers the criterion.
         while steps.len() <= MAX_STEPS {
-            if let Some(t) = undetermined_term(problem, &current) {
-                let name = t.name(&current.model.medium);
-                current = fit_model(problem, &current.model.without(t), &lm, &criterion)?;
-                fits += 1;
-                steps.push(step_record(
-                    steps.len(),
-                    format!("drop {name} (undetermined)"),
-                    &current,
-                    vec![],
-                ));
-                continue;
-            }
-            // The term just added lowered the criterion: only older ones may go.
-            let older: Vec<Term> = current
-                .model
-                .grown
-                .iter()
-                .copied()
-                .take(current.model.grown.len().saturating_sub(1))
-                .collect();
-            if older.is_empty() {
+            let Some((name, without)) = best_drop(&fitter, &current)? else {
                 break;
-            }
-            let without: Vec<Model> = older.iter().map(|t| current.model.without(*t)).collect();
-            let refits = fit_all(problem, &without, &lm, &criterion)?;
-            fits += refits.len();
-            match argmin(refits.iter().map(|f| f.criterion)) {
-                Some(i) if refits[i].criterion < current.criterion => {
-                    let name = older[i].name(&current.model.medium);
-                    current = refits[i].clone();
-                    steps.push(step_record(
-                        steps.len(),
-                        format!("drop {name} (criterion)"),
-                        &current,
-                        vec![],
-                    ));
-                }
-                _ => break,
-            }
+            };
+            current = without;
+            steps.push(step_record(
+                steps.len(),
+                format!("drop {name}"),
+                &current,
+                vec![],
+            ));
         }
     };
+    let current = polish(problem, &full, current)?;
     let at_noise_floor = criterion.at_floor(current.chi2, current.model.free.len());
+    let held = current
+        .model
+        .held
+        .iter()
+        .map(|h| HeldReport {
+            name: h.param.to_string(),
+            value: h.value,
+            reason: h.reason.clone(),
+        })
+        .collect();
     let report = GrowReport {
         criterion: criterion.describe(),
         noise: settings.noise,
@@ -480,7 +353,8 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
         steps,
         stop_reason,
         at_noise_floor,
-        fits,
+        held,
+        fits: fitter.fits() + full.fits(),
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     Ok(Grown {
@@ -489,11 +363,11 @@ pub fn grow(problem: &Problem, settings: &GrowSettings) -> Result<Grown> {
     })
 }
 
-/// The problem whose fit is the grown model: its terms and free parameters,
-/// started from the seed the kept fit started from, fitted by
-/// Levenberg–Marquardt alone. That repeats the kept fit (deterministic, and
-/// with at least its iterations), so the result's history and convergence
-/// plot show the fit from its seed.
+/// The problem whose fit is the grown model: its terms and free parameters
+/// (held ones fixed at their values), started from the seed the kept fit
+/// started from, fitted by Levenberg–Marquardt alone. That repeats the kept
+/// fit (deterministic, and with at least its iterations), so the result's
+/// history and convergence plot show the fit from its seed.
 pub fn grown_problem(problem: &Problem, grown: &Grown) -> Problem {
     let model = &grown.fitted.start;
     let mut p = problem.clone();
@@ -508,75 +382,6 @@ pub fn grown_problem(problem: &Problem, grown: &Grown) -> Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_criterion_charges_ln_m_per_parameter_and_knows_its_floor() {
-        let c = Criterion {
-            noise: Noise::Uniform(0.01),
-            m: 50,
-        };
-        // χ² = 2F/σ² = 50 at F = 2.5e-3.
-        let chi2 = c.chi2(2.5e-3, &[]);
-        assert!((chi2.unwrap() - 50.0).abs() < 1e-9);
-        let d = c.value(2.5e-3, chi2, 6) - c.value(2.5e-3, chi2, 0);
-        assert!((d - 6.0 * 50f64.ln()).abs() < 1e-9);
-        // Floor for p = 0: 50 + 2·√100 = 70.
-        assert_eq!(c.at_floor(c.chi2(0.5 * 70.0e-4, &[]), 0), Some(true));
-        assert_eq!(c.at_floor(c.chi2(0.5 * 70.1e-4, &[]), 0), Some(false));
-        let unknown = Criterion {
-            noise: Noise::Unknown,
-            m: 50,
-        };
-        assert_eq!(unknown.at_floor(unknown.chi2(1.0, &[]), 0), None);
-    }
-
-    /// A problem of three pairs with weights 1, 2, 0 and the given `noise`
-    /// fields.
-    fn three_pairs(noise: [&str; 3]) -> Problem {
-        let pair = |w: f64, n: &str| {
-            format!(
-                r#"{{"origin": [0, 1.6, 0], "through": [0, 1.0, 900], "target": [0, 2.0, 900], "weight": {w}{n}}}"#
-            )
-        };
-        let text = format!(
-            r#"{{"medium": {{"scale": 1.0, "background": {{"n": 1.0, "a": 40.0}}}}, "pairs": [{}, {}, {}]}}"#,
-            pair(1.0, noise[0]),
-            pair(2.0, noise[1]),
-            pair(0.0, noise[2]),
-        );
-        Problem::parse(&text, std::path::Path::new("p.json")).unwrap()
-    }
-
-    #[test]
-    fn per_pair_noise_weighs_each_pairs_residual_by_its_own_sigma() {
-        let p = three_pairs([r#", "noise": 0.01"#, r#", "noise": 0.02"#, ""]);
-        assert_eq!(p.pair_noise, vec![Some(0.01), Some(0.02), None]);
-        // The third pair has no σ of its own and none is given: refused,
-        // naming `solver.noise`.
-        let e = Criterion::of(&p, None).unwrap_err().to_string();
-        assert!(e.contains("solver.noise") && e.contains("pairs[2]"), "{e}");
-        // With a global σ for it: kᵢ = 1/(wᵢσᵢ)², 0 at weight 0.
-        let c = Criterion::of(&p, Some(0.5)).unwrap();
-        assert_eq!(
-            c.noise,
-            Noise::PerPair(vec![1e4, 1.0 / (0.04f64 * 0.04), 0.0])
-        );
-        assert!(c.needs_pairs());
-        // |r₁|² = (1·3 cm)², |r₂|² = (2·2 cm)²: each pair at 3σ and 1σ,
-        // χ² = 9 + 1 (the pair of weight 0 counts nothing).
-        let sq = [0.03f64.powi(2), 0.04f64.powi(2), 0.0];
-        let f = 0.5 * sq.iter().sum::<f64>();
-        let chi2 = c.chi2(f, &sq).unwrap();
-        assert!((chi2 - 10.0).abs() < 1e-9, "{chi2}");
-        // One global σ would have read 2F/σ² = Σ|rᵢ|²/σ² instead.
-        let uniform = Criterion::of(&three_pairs(["", "", ""]), Some(0.01)).unwrap();
-        assert_eq!(uniform.noise, Noise::Uniform(0.01));
-        assert!((uniform.chi2(f, &[]).unwrap() - 25.0).abs() < 1e-9);
-        assert!(uniform.describe().contains("2F/σ²"));
-        assert!(c.describe().contains("σᵢ"));
-        // A failed fit has χ² = ∞.
-        assert_eq!(c.chi2(f64::INFINITY, &[]), Some(f64::INFINITY));
-    }
 
     #[test]
     fn ties_go_to_the_earliest() {

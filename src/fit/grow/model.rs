@@ -5,9 +5,24 @@
 //! **The logistic model.** Adding or dropping a term changes
 //! S = Σ|amplitudes|, which divides every term (`docs/model.md`); `scale` is
 //! multiplied by S_new/S_old at the same time, so the other terms' δ does not
-//! change, and `scale` is freed with the first term added, so the fit can set
-//! every term's strength (with one amplitude, the background's, left fixed
-//! there is no gauge freedom).
+//! change.
+//!
+//! **The gauge.** δ does not change when every amplitude is multiplied by the
+//! same number, so with `scale` free one amplitude must be held, or the fit
+//! has a flat direction that makes every amplitude look undetermined.
+//! `scale` is freed with the first grown term (the grown terms' amplitudes
+//! free, the problem's as the problem says), so the background's amplitude
+//! stays fixed unless the problem frees it; a model with every amplitude
+//! free has the first held ([`GAUGE_REASON`]). With every grown term dropped
+//! again, `scale` is free only if the problem freed it. Every model growing
+//! fits is therefore gauge-free, and its identifiability means what the data
+//! can tell. A fit that turned every term off (`scale` → 0) gives a new
+//! term no strength and no derivative: its seeds start from the start's
+//! strength per unit of amplitude.
+//!
+//! **Held parameters.** A parameter the pairs cannot determine, or one that
+//! runs away, is held ([`Model::hold`]): set back to its value at the start
+//! of the fit, taken out of `free`, and listed in `held` with the reason.
 //!
 //! **Real air.** Temperatures are absolute (`docs/air.md`): a term adds its
 //! kelvins and nothing else changes, so nothing is rescaled and no extra
@@ -99,6 +114,34 @@ pub struct Model {
     pub bounds: Vec<(f64, f64)>,
     /// Terms growing added, in the order added.
     pub grown: Vec<Term>,
+    /// Parameters held at a value instead of fitted, and why.
+    pub held: Vec<Held>,
+    /// The problem's own free parameters and their bounds (what `free`
+    /// returns to when every grown term is dropped, less the held ones).
+    pub base_free: Vec<(Param, (f64, f64))>,
+    /// The start's `scale` per unit of amplitude, k/S (logistic; 0 for real
+    /// air): a seed whose strength fell far below it starts from it.
+    pub base_strength: f64,
+}
+
+/// The least |rate| (m) of a logistic rate the problem frees without
+/// bounds, during growth: the rate keeps its sign.
+pub const MIN_RATE: f64 = 1e-3;
+
+/// Why the gauge amplitude is held.
+pub const GAUGE_REASON: &str = "the gauge: δ does not change when every amplitude is multiplied by the same number, so the first is held and the others and `scale` set the strengths";
+
+/// A parameter held at a value: one the pairs do not determine, one that
+/// ran away in a fit, or the amplitude that fixes the logistic gauge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Held {
+    /// The parameter.
+    pub param: Param,
+    /// The value it is held at: where the fit put it (undetermined), its start
+    /// (ran away), or the start's (the gauge).
+    pub value: f64,
+    /// Why, in words.
+    pub reason: String,
 }
 
 impl Model {
@@ -167,9 +210,130 @@ impl Model {
         t
     }
 
-    /// Frees `p` with `bounds` unless it is free already.
+    /// The model of a problem's start: its medium, free parameters and
+    /// bounds, nothing grown; a logistic start that frees every amplitude
+    /// has the first held ([`GAUGE_REASON`]).
+    pub fn start(medium: Medium, free: Vec<Param>, bounds: Vec<(f64, f64)>) -> Model {
+        let base_strength = match &medium {
+            Medium::Logistic(l) if l.amplitude_sum() > 0.0 => l.scale / l.amplitude_sum(),
+            _ => 0.0,
+        };
+        // A logistic rate never crosses zero, where the model is undefined:
+        // an unbounded one keeps its sign (and |a| ≥ 1 mm), as grown ones do.
+        let bounds: Vec<(f64, f64)> = free
+            .iter()
+            .zip(bounds)
+            .map(|(p, b)| {
+                let rate = matches!(
+                    p,
+                    Param::BackgroundA | Param::InversionA | Param::Hot(_, HotField::A)
+                );
+                match medium.get(*p) {
+                    Some(v) if rate && b.0 == f64::NEG_INFINITY && b.1 == f64::INFINITY => {
+                        if v > 0.0 {
+                            (MIN_RATE, f64::INFINITY)
+                        } else {
+                            (f64::NEG_INFINITY, -MIN_RATE)
+                        }
+                    }
+                    _ => b,
+                }
+            })
+            .collect();
+        let mut m = Model {
+            medium,
+            base_free: free.iter().copied().zip(bounds.iter().copied()).collect(),
+            free,
+            bounds,
+            grown: vec![],
+            held: vec![],
+            base_strength,
+        };
+        m.regauge();
+        m
+    }
+
+    /// Whether `p` is held.
+    pub fn is_held(&self, p: Param) -> bool {
+        self.held.iter().any(|h| h.param == p)
+    }
+
+    /// The model with `params` held: each set to `values` (same order), taken
+    /// out of `free` and listed in `held` with its reason.
+    pub fn hold(&self, params: &[(Param, f64, String)]) -> Model {
+        let mut m = self.clone();
+        for (p, v, why) in params {
+            let _ = m.medium.set(*p, *v);
+            m.unfree(*p);
+            m.held.push(Held {
+                param: *p,
+                value: *v,
+                reason: why.clone(),
+            });
+        }
+        m
+    }
+
+    /// Takes `p` out of `free` (and its bounds), if it is there.
+    fn unfree(&mut self, p: Param) {
+        if let Some(k) = self.free.iter().position(|q| *q == p) {
+            self.free.remove(k);
+            self.bounds.remove(k);
+        }
+    }
+
+    /// The problem's bounds of `p`, if the problem frees it.
+    fn base_bounds(&self, p: Param) -> Option<(f64, f64)> {
+        self.base_free
+            .iter()
+            .find(|(q, _)| *q == p)
+            .map(|(_, b)| *b)
+    }
+
+    /// Sets the logistic parametrisation after a change of terms (see the
+    /// module doc): `scale` free with a grown term or where the problem
+    /// frees it, and the first amplitude held when every one is free. Real
+    /// air has no gauge: nothing changes.
+    fn regauge(&mut self) {
+        let Medium::Logistic(l) = &self.medium else {
+            return;
+        };
+        let mut amplitudes: Vec<(Param, f64)> = Vec::new();
+        if let Some(b) = l.background {
+            amplitudes.push((Param::BackgroundN, b.n));
+        }
+        if let Some(i) = l.inversion {
+            amplitudes.push((Param::InversionN, i.n));
+        }
+        amplitudes.extend(
+            l.hotspots
+                .iter()
+                .enumerate()
+                .map(|(j, h)| (Param::Hot(j, HotField::N), h.n)),
+        );
+        self.held.retain(|h| h.reason != GAUGE_REASON);
+        let grown = !self.grown.is_empty();
+        match (self.base_bounds(Param::Scale), grown) {
+            (Some(b), _) => self.free_param(Param::Scale, b),
+            (None, true) => self.free_param(Param::Scale, (0.0, f64::INFINITY)),
+            (None, false) => self.unfree(Param::Scale),
+        }
+        if amplitudes.is_empty() || !amplitudes.iter().all(|(p, _)| self.free.contains(p)) {
+            return;
+        }
+        // Every amplitude free: the first (the background's) is held.
+        let (p, v) = amplitudes[0];
+        self.unfree(p);
+        self.held.push(Held {
+            param: p,
+            value: v,
+            reason: GAUGE_REASON.into(),
+        });
+    }
+
+    /// Frees `p` with `bounds` unless it is free already or held.
     fn free_param(&mut self, p: Param, bounds: (f64, f64)) {
-        if !self.free.contains(&p) {
+        if !self.free.contains(&p) && !self.is_held(p) {
             self.free.push(p);
             self.bounds.push(bounds);
         }
@@ -188,13 +352,20 @@ impl Model {
         let s_old = amplitude_sum(&m.medium);
         change(&mut m.medium);
         keep_strengths(&mut m.medium, s_old);
-        if matches!(m.medium, Medium::Logistic(_)) {
-            m.free_param(Param::Scale, (0.0, f64::INFINITY));
+        if let Medium::Logistic(l) = &mut m.medium {
+            // A model whose fit turned every term off (`scale` → 0) would
+            // give the new term no strength and no derivative: the seed
+            // starts from the start's strength per unit of amplitude.
+            let s = l.amplitude_sum();
+            if l.scale < 0.1 * self.base_strength * s {
+                l.scale = self.base_strength * s;
+            }
         }
         for (p, b) in params {
             m.free_param(p, b);
         }
         m.grown.push(term);
+        m.regauge();
         m
     }
 
@@ -317,6 +488,16 @@ impl Model {
                 (_, t) => t,
             })
             .collect();
+        m.held = self
+            .held
+            .iter()
+            .filter(|h| !term.owns(h.param))
+            .map(|h| Held {
+                param: renumber(h.param),
+                ..h.clone()
+            })
+            .collect();
+        m.regauge();
         m
     }
 }
@@ -356,6 +537,9 @@ mod tests {
             free: vec![],
             bounds: vec![],
             grown: vec![],
+            held: vec![],
+            base_free: vec![],
+            base_strength: 0.02,
         }
     }
 
@@ -402,7 +586,8 @@ mod tests {
         let share = |m: &Model, n: f64| logistic(m).scale * n / logistic(m).amplitude_sum();
         assert!((share(&one, -1.0) - share(&two, -1.0)).abs() < 1e-15);
         assert!((share(&one, 1.0) - share(&two, 1.0)).abs() < 1e-15);
-        assert_eq!(one.without(Term::HotSpot(0)).free, vec![Param::Scale]);
+        // Every grown term dropped: `scale` is fixed again, as in the start.
+        assert!(one.without(Term::HotSpot(0)).free.is_empty());
     }
 
     #[test]
@@ -414,6 +599,9 @@ mod tests {
             free: vec![],
             bounds: vec![],
             grown: vec![],
+            held: vec![],
+            base_free: vec![],
+            base_strength: 0.02,
         };
         let b = (0.0, 1.0);
         let m = start

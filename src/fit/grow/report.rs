@@ -20,6 +20,20 @@ pub struct CandidateReport {
     pub objective: f64,
     /// The criterion of that fit.
     pub criterion: f64,
+    /// Parameters the fit held (undetermined), beyond the seed's.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub held: usize,
+}
+
+/// A parameter of the grown model held at a value instead of fitted.
+#[derive(Clone, Debug, Serialize)]
+pub struct HeldReport {
+    /// Its path (`hotspots[0].radius`, `background.a`).
+    pub name: String,
+    /// The value it is held at.
+    pub value: f64,
+    /// Why: undetermined by the pairs, ran away in a fit, or the gauge.
+    pub reason: String,
 }
 
 /// One step of the growth: the model it left and why.
@@ -72,6 +86,9 @@ pub struct GrowReport {
     /// 2·√(2(m − p))), when σ is known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub at_noise_floor: Option<bool>,
+    /// The grown model's held parameters: not fitted, kept at these values.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<HeldReport>,
     /// Candidate and refit fits made, over all steps.
     pub fits: usize,
     /// Wall time of the growth, before the final fit (seconds).

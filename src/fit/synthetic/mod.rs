@@ -3,6 +3,8 @@
 //! the known medium again (the recovery tests), and it is how the bundled
 //! example problems were made consistent.
 
+pub mod grow_cases;
+
 use crate::medium::IndexField;
 use crate::pair::PointPair;
 use crate::trace::TraceOptions;
