@@ -357,5 +357,8 @@ pub fn grow_summary(g: &crate::fit::grow::GrowReport) -> String {
         }
     }
     let _ = writeln!(s, "stopped growing: {}", g.stop_reason);
+    for h in &g.held {
+        let _ = writeln!(s, "held {} = {}: {}", h.name, h.value, h.reason);
+    }
     s
 }

@@ -361,6 +361,12 @@ impl Model {
                 l.scale = self.base_strength * s;
             }
         }
+        if matches!(m.medium, Medium::Logistic(_)) {
+            let b = self
+                .base_bounds(Param::Scale)
+                .unwrap_or((0.0, f64::INFINITY));
+            m.free_param(Param::Scale, b);
+        }
         for (p, b) in params {
             m.free_param(p, b);
         }
