@@ -42,7 +42,7 @@ pub struct GrowStep {
     /// 0 for the starting model.
     pub step: usize,
     /// What the step did: `start`, `add inversion`, `add hotspots[0]`,
-    /// `drop hotspots[1] (undetermined)`, `drop inversion (criterion)`.
+    /// `drop hotspots[1]`, `drop inversion`, `no candidate lowers the criterion`.
     pub action: String,
     /// The medium's terms after the step (`background`, `inversion`, `hotspots[0]`).
     pub terms: Vec<String>,
