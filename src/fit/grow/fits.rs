@@ -21,12 +21,12 @@
 //! `scale`, max(|start|, 1) for every other (metres, kelvins, K/m).
 
 use super::criterion::Criterion;
-use super::model::Model;
+use super::model::{Model, amplitude_sum};
 use crate::error::{Error, Result};
 use crate::fit::identify;
 use crate::fit::objective::Objective;
 use crate::fit::solve::run_lm;
-use crate::medium::{HotField, Medium, Param};
+use crate::medium::{HotField, Param};
 use crate::problem::{Problem, SolverSettings};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -261,14 +261,6 @@ fn poisoned() -> Error {
     Error::Solver {
         run: "grow".into(),
         message: "a fit's thread panicked".into(),
-    }
-}
-
-/// S = Σ|amplitudes| of a logistic medium; 1 for other kinds (no amplitude).
-fn amplitude_sum(medium: &Medium) -> f64 {
-    match medium {
-        Medium::Logistic(m) => m.amplitude_sum(),
-        _ => 1.0,
     }
 }
 

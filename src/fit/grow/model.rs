@@ -509,7 +509,7 @@ impl Model {
 }
 
 /// S = Σ|amplitudes| of a logistic medium; 0 for real air (which has none).
-fn amplitude_sum(medium: &Medium) -> f64 {
+pub(super) fn amplitude_sum(medium: &Medium) -> f64 {
     match medium {
         Medium::Logistic(m) => m.amplitude_sum(),
         _ => 0.0,
