@@ -10,6 +10,7 @@ pub mod envmap;
 pub mod error;
 pub mod evaluate;
 pub mod fit;
+pub mod geo;
 pub mod interrupt;
 pub mod io;
 pub mod math;

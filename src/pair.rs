@@ -2,6 +2,7 @@
 //! `target`", and the residual that measures how far the air is from that.
 
 use crate::error::{FieldError, ValueError};
+use crate::geo::{Angle, Horizon, Point, Site};
 use crate::math::{Real, V3};
 use crate::medium::IndexField;
 use crate::medium::air::WAVELENGTH_RANGE;
@@ -50,46 +51,120 @@ pub fn check_noise(v: f64) -> std::result::Result<f64, ValueError> {
 
 /// One pair as a problem file holds it: the [`PointPair`] and, optionally,
 /// the noise σ of its endpoint, which only a grown model's criterion reads
-/// (`crate::fit::grow`). [`PointPair`] itself has no noise: it is what is
-/// traced. Its fields repeat [`PointPair`]'s rather than `#[serde(flatten)]`
-/// it, because serde's `flatten` cannot be combined with
-/// `deny_unknown_fields`, which names a misspelt field.
+/// (`crate::fit::grow`). Points may be geographic (`crate::geo`, with the
+/// file's `site`), and the line of sight may be given by `elevation` and
+/// `azimuth` instead of `through`; [`PairEntry::resolve`] turns it into the
+/// [`PointPair`] that is traced. Its fields repeat [`PointPair`]'s rather
+/// than `#[serde(flatten)]` it, because serde's `flatten` cannot be combined
+/// with `deny_unknown_fields`, which names a misspelt field.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PairEntry {
-    /// The observer (metres).
-    pub origin: [f64; 3],
-    /// A point on the line of sight, which fixes the launch direction.
-    pub through: [f64; 3],
-    /// The point the observer must see.
-    pub target: [f64; 3],
+    /// The observer: `[x, y, z]` (metres) or a geographic point.
+    pub origin: Point,
+    /// A point on the line of sight, which fixes the launch direction
+    /// (or `elevation` and `azimuth`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub through: Option<Point>,
+    /// The launch direction's elevation above the local horizontal at the
+    /// origin (degrees, or a degree-minute-second string), instead of
+    /// `through`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elevation: Option<Angle>,
+    /// The launch direction's azimuth from north toward east (degrees, or a
+    /// degree-minute-second string); absent with `elevation`: the target's
+    /// geometric azimuth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub azimuth: Option<Angle>,
+    /// The point the observer must see: `[x, y, z]` or a geographic point.
+    pub target: Point,
     /// Weight of this pair's residual (default 1).
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub weight: f64,
     /// The vacuum wavelength (nm) this pair is seen at (real air only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wavelength: Option<f64>,
-    /// The endpoint noise σᵢ (metres, per component in the target plane)
-    /// of this pair; absent: the problem's `solver.noise`.
+    /// The endpoint noise σᵢ of this pair (metres per component in the
+    /// target plane; arcseconds with angle residuals); absent: the
+    /// problem's `solver.noise`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<f64>,
 }
 
 impl PairEntry {
-    /// The pair to trace.
-    pub fn pair(&self) -> PointPair {
-        PointPair {
-            origin: self.origin,
-            through: self.through,
-            target: self.target,
+    /// The pair to trace: points in the local frame (geographic ones placed
+    /// from `site` over `earth`'s sphere), the line of sight from `through`
+    /// or from `elevation` and `azimuth` at the origin's horizon (`through`
+    /// is then put on that line at the target's distance).
+    pub fn resolve(&self, site: Option<&Site>, earth: Earth) -> Result<PointPair, FieldError> {
+        let radius = match earth {
+            Earth::Round { radius } => Some(radius),
+            Earth::Flat => None,
+        };
+        let place = |p: &Point, name: &str| {
+            p.resolve(site, radius.unwrap_or(f64::INFINITY))
+                .map_err(|e| e.within(name))
+        };
+        let origin = place(&self.origin, "origin")?;
+        let target = place(&self.target, "target")?;
+        let through = match (&self.through, self.elevation, self.azimuth) {
+            (Some(t), None, None) => place(t, "through")?,
+            (Some(_), Some(_), _) => {
+                return Err(FieldError::new(
+                    "elevation",
+                    "give the line of sight once: `through`, or `elevation` (with `azimuth`), not both",
+                ));
+            }
+            (Some(_), None, Some(_)) => {
+                return Err(FieldError::new(
+                    "azimuth",
+                    "give the line of sight once: `through`, or `elevation` with `azimuth`, not both",
+                ));
+            }
+            (None, None, Some(_)) => {
+                return Err(FieldError::new(
+                    "elevation",
+                    "missing: an `azimuth` needs an `elevation` (degrees above the horizontal)",
+                ));
+            }
+            (None, None, None) => {
+                return Err(FieldError::new(
+                    "through",
+                    "missing: give `through` (a point on the line of sight), or `elevation` and `azimuth`",
+                ));
+            }
+            (None, Some(e), a) => {
+                if !(e.degrees > -90.0 && e.degrees < 90.0) {
+                    return Err(FieldError::new(
+                        "elevation",
+                        format!(
+                            "must lie strictly between -90 and 90 degrees, got {}",
+                            e.degrees
+                        ),
+                    ));
+                }
+                let h = Horizon::at(origin, radius).map_err(|e| e.within("origin"))?;
+                let to = std::array::from_fn(|k| target[k] - origin[k]);
+                let azimuth = match a {
+                    Some(a) => a.degrees,
+                    None => h.azimuth(to),
+                };
+                let range = to.iter().map(|v| v * v).sum::<f64>().sqrt().max(1.0);
+                let d = h.direction(e.degrees, azimuth);
+                std::array::from_fn(|k| origin[k] + range * d[k])
+            }
+        };
+        Ok(PointPair {
+            origin,
+            through,
+            target,
             weight: self.weight,
             wavelength: self.wavelength,
-        }
+        })
     }
 
-    /// [`PointPair::validate`], and the noise (if any) as [`check_noise`] says.
+    /// The noise (if any) as [`check_noise`] says.
     pub fn validate(&self) -> Result<(), FieldError> {
-        self.pair().validate()?;
         match self.noise.map(check_noise) {
             Some(Err(e)) => Err(FieldError::new("noise", e.to_string())),
             _ => Ok(()),
@@ -100,9 +175,11 @@ impl PairEntry {
 impl From<PointPair> for PairEntry {
     fn from(p: PointPair) -> Self {
         PairEntry {
-            origin: p.origin,
-            through: p.through,
-            target: p.target,
+            origin: p.origin.into(),
+            through: Some(p.through.into()),
+            elevation: None,
+            azimuth: None,
+            target: p.target.into(),
             weight: p.weight,
             wavelength: p.wavelength,
             noise: None,

@@ -919,3 +919,118 @@ fn refraction_refuses_bad_input_by_name() {
     assert_eq!(run.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&run.stderr).contains("nowhere.json"));
 }
+
+/// A problem over the round earth from a site, one pair given by places and
+/// angles: `site`, `origin`, `target`, `elevation`, `azimuth` as given.
+fn geo(site: &str, pair: &str) -> String {
+    format!(
+        r#"{{
+  "name": "g",
+  {site}
+  "medium": {{ "scale": 1.0, "background": {{ "n": 1.0, "a": 40.0 }} }},
+  "pairs": [ {pair} ],
+  "trace": {{ "method": "rk4", "step": 20.0 }}
+}}"#
+    )
+}
+
+const SITE: &str = r#""site": { "latitude": 43.5, "longitude": -70.2, "height": 23.42 },"#;
+const PLACE: &str = r#"{ "latitude": 43.4, "longitude": -70.25, "height": 24.38 }"#;
+
+#[test]
+fn geographic_fields_are_checked_by_name() {
+    // The good one first: it traces.
+    let good = geo(
+        SITE,
+        &format!(r#"{{ "origin": [0, 23.42, 0], "elevation": "-0°02'47\"", "target": {PLACE} }}"#),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("good.json");
+    std::fs::write(&input, &good).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("trace")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+
+    let pair = |extra: &str| {
+        format!(r#"{{ "origin": [0, 23.42, 0], {extra} "target": {PLACE} }}"#)
+    };
+    for (text, expected) in [
+        (
+            geo(
+                r#""site": { "latitude": 91, "longitude": 0 },"#,
+                &pair(r#""elevation": 0,"#),
+            ),
+            vec!["site.latitude", "[-90, 90]", "91"],
+        ),
+        (
+            geo(
+                r#""site": { "latitude": 10, "longitude": 400 },"#,
+                &pair(r#""elevation": 0,"#),
+            ),
+            vec!["site.longitude", "400"],
+        ),
+        (
+            geo(
+                r#""site": { "latitude": 10, "longitude": 1, "height": 1e9 },"#,
+                &pair(r#""elevation": 0,"#),
+            ),
+            vec!["site.height"],
+        ),
+        (
+            geo(
+                r#""site": { "latitude": 10, "longitude": 1, "heigth": 3 },"#,
+                &pair(r#""elevation": 0,"#),
+            ),
+            vec!["site", "heigth"],
+        ),
+        (geo("", &pair(r#""elevation": 0,"#)), vec!["pairs[0].target", "needs a `site`"]),
+        (
+            geo(
+                SITE,
+                r#"{ "origin": [0, 23.42, 0], "elevation": 0, "target": { "latitude": -91, "longitude": 0 } }"#,
+            ),
+            vec!["pairs[0].target.latitude", "[-90, 90]"],
+        ),
+        (
+            geo(SITE, &pair(r#""through": [0, 20, 900], "elevation": 0,"#)),
+            vec!["pairs[0].elevation", "not both"],
+        ),
+        (
+            geo(SITE, &pair(r#""through": [0, 20, 900], "azimuth": 10,"#)),
+            vec!["pairs[0].azimuth", "not both"],
+        ),
+        (
+            geo(SITE, &pair(r#""azimuth": 10,"#)),
+            vec!["pairs[0].elevation", "needs an `elevation`"],
+        ),
+        (geo(SITE, &pair("")), vec!["pairs[0].through", "missing"]),
+        (
+            geo(SITE, &pair(r#""elevation": "-0°02'x47\"","#)),
+            vec!["pairs[0].elevation", "is not an angle"],
+        ),
+        (
+            geo(SITE, &pair(r#""elevation": "1°75'","#)),
+            vec!["pairs[0].elevation", "minutes must lie in [0, 60)"],
+        ),
+        (
+            geo(SITE, &pair(r#""elevation": 90,"#)),
+            vec!["pairs[0].elevation", "strictly between -90 and 90"],
+        ),
+        (
+            geo(SITE, &pair(r#""elevation": true,"#)),
+            vec!["pairs[0].elevation", "an angle"],
+        ),
+        (
+            geo(
+                SITE,
+                r#"{ "origin": [0, 23.42], "elevation": 0, "target": [0, 1, 900] }"#,
+            ),
+            vec!["pairs[0].origin"],
+        ),
+    ] {
+        rejects(&text, &expected.to_vec());
+    }
+}

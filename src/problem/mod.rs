@@ -34,6 +34,7 @@ pub use solver::{
 pub use trace::{DEFAULT_STEP, DEFAULT_TOLERANCE, TraceSpec, trace_options};
 
 use crate::error::{Error, Result};
+use crate::geo::Site;
 use crate::io::json::{parse_json, read_input};
 use crate::medium::{Medium, Param};
 use crate::pair::{PairEntry, PointPair};
@@ -68,9 +69,14 @@ pub struct ProblemFile {
     /// Solver settings.
     #[serde(default)]
     pub solver: SolverSpec,
-    /// The round earth (`{"radius": R}`); absent: the flat ground.
+    /// The round earth (`{"radius": R}`); absent: the flat ground, or with
+    /// a `site` the sphere of WGS 84's Gaussian mean radius there.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub earth: Option<EarthSpec>,
+    /// Where the local frame stands on the earth (`docs/geo.md`): needed by
+    /// geographic points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<Site>,
 }
 
 /// A validated problem.
@@ -101,6 +107,19 @@ pub struct Problem {
     pub solver: SolverSettings,
 }
 
+/// The ground of a file with `earth` and `site` sections: the sphere of
+/// `earth.radius`; else, with a site, the sphere of WGS 84's Gaussian mean
+/// radius at the site's latitude (`crate::geo`); else the flat ground.
+pub fn earth_of(earth: Option<EarthSpec>, site: Option<&Site>) -> Earth {
+    match (earth, site) {
+        (Some(e), _) => Earth::Round { radius: e.radius },
+        (None, Some(s)) => Earth::Round {
+            radius: s.gaussian_radius(),
+        },
+        (None, None) => Earth::Flat,
+    }
+}
+
 impl Problem {
     /// Reads and validates a problem file.
     pub fn load(path: &Path) -> Result<Problem> {
@@ -124,11 +143,19 @@ impl Problem {
         if let Some(e) = &file.earth {
             e.validate().map_err(|e| e.within("earth").in_file(path))?;
         }
-        let earth = Earth::from(file.earth);
+        if let Some(s) = &file.site {
+            s.validate().map_err(|e| e.within("site").in_file(path))?;
+        }
+        let earth = earth_of(file.earth, file.site.as_ref());
+        let mut pairs = Vec::with_capacity(file.pairs.len());
         for (i, pair) in file.pairs.iter().enumerate() {
-            pair.validate()
-                .and_then(|()| pair.pair().validate_on(earth))
+            let resolved = pair
+                .validate()
+                .and_then(|()| pair.resolve(file.site.as_ref(), earth))
+                .and_then(|p| p.validate().map(|()| p))
+                .and_then(|p| p.validate_on(earth).map(|()| p))
                 .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
+            pairs.push(resolved);
             if pair.wavelength.is_some() && !file.medium.is_dispersive() {
                 return Err(bad(
                     format!("pairs[{i}].wavelength"),
@@ -227,7 +254,7 @@ impl Problem {
             medium: file.medium,
             free,
             bounds,
-            pairs: file.pairs.iter().map(PairEntry::pair).collect(),
+            pairs,
             pair_noise: file.pairs.iter().map(|p| p.noise).collect(),
             trace,
             trace_spec,
