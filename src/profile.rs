@@ -32,8 +32,8 @@
 
 use crate::math::V3;
 use crate::medium::air::{
-    Air, AirField, AirMedium, Formula, KELVIN, Lapse, Temperature, refractivity::AirState,
-    refractivity::refractivity,
+    Air, AirField, AirMedium, Formula, Humidity, KELVIN, Lapse, Temperature,
+    refractivity::AirState, refractivity::refractivity,
 };
 use crate::medium::{IndexField, Medium};
 use serde::Serialize;
@@ -149,7 +149,7 @@ pub fn standard_atmosphere() -> AirMedium {
             },
             pressure: P0,
             hydrostatic: true,
-            humidity: 0.0,
+            humidity: Humidity::Constant(0.0),
             wavelength: 550.0,
             co2: crate::medium::air::DEFAULT_CO2,
             refractivity: Formula::GladstoneDale(k),

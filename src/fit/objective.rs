@@ -8,12 +8,13 @@
 //! step sizes come from the real parts only, which freezes the step sequence for
 //! the derivative: no step-control noise, unlike finite differences.
 
+use crate::evaluate::trace_jobs;
 use crate::math::Real;
 use crate::medium::{Field, Medium, PairFields, Param};
 use crate::pair::PointPair;
 use crate::problem::Problem;
 use crate::trace::batch::tangent::trace_tangent;
-use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
+use crate::trace::batch::{BatchOptions, RayJob};
 use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{DualSVec64, DualStruct};
@@ -182,7 +183,7 @@ impl Objective {
                     // Ctrl-C: the chunks left are skipped, and the solver's
                     // next cancellation point discards these residuals.
                     if !crate::interrupt::requested() {
-                        trace_batch_into(field, jobs, &batch, part)
+                        trace_jobs(field, jobs, &batch, part)
                     }
                 });
             for (i, t) in members.into_iter().zip(part) {

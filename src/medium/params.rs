@@ -121,8 +121,12 @@ pub enum AirParam {
     TableTemperature(usize),
     /// `pressure` (Pa at h = 0).
     Pressure,
-    /// `humidity` (relative, 0…1).
+    /// `humidity` (relative, 0…1), when it is one number.
     Humidity,
+    /// `humidity.table[i][0]`: the height of row i of a humidity table (m).
+    HumidityTableHeight(usize),
+    /// `humidity.table[i][1]`: the relative humidity of row i (0…1).
+    HumidityTableValue(usize),
     /// `wavelength` (nm, vacuum).
     Wavelength,
     /// `co2` (ppm by mole).
@@ -132,7 +136,7 @@ pub enum AirParam {
 }
 
 impl AirParam {
-    /// The fixed names (every one but the table's).
+    /// The fixed names (every one but the tables').
     const NAMED: [(AirParam, &'static str); 12] = [
         (AirParam::Base, "temperature.base"),
         (AirParam::Lapse, "temperature.lapse"),
@@ -160,6 +164,8 @@ impl fmt::Display for AirParam {
         match self {
             AirParam::TableHeight(i) => write!(f, "temperature.table[{i}][0]"),
             AirParam::TableTemperature(i) => write!(f, "temperature.table[{i}][1]"),
+            AirParam::HumidityTableHeight(i) => write!(f, "humidity.table[{i}][0]"),
+            AirParam::HumidityTableValue(i) => write!(f, "humidity.table[{i}][1]"),
             named => {
                 let name = AirParam::NAMED
                     .iter()
@@ -180,15 +186,20 @@ impl FromStr for AirParam {
         if let Some((p, _)) = AirParam::NAMED.iter().find(|(_, n)| *n == s) {
             return Ok(*p);
         }
-        let rest = s.strip_prefix("temperature.table[").ok_or(())?;
+        let (rest, humidity) = match s.strip_prefix("temperature.table[") {
+            Some(rest) => (rest, false),
+            None => (s.strip_prefix("humidity.table[").ok_or(())?, true),
+        };
         let (index, column) = rest.split_once("][").ok_or(())?;
         if index.is_empty() || !index.bytes().all(|b| b.is_ascii_digit()) {
             return Err(());
         }
         let i: usize = index.parse().map_err(|_| ())?;
-        match column {
-            "0]" => Ok(AirParam::TableHeight(i)),
-            "1]" => Ok(AirParam::TableTemperature(i)),
+        match (column, humidity) {
+            ("0]", false) => Ok(AirParam::TableHeight(i)),
+            ("1]", false) => Ok(AirParam::TableTemperature(i)),
+            ("0]", true) => Ok(AirParam::HumidityTableHeight(i)),
+            ("1]", true) => Ok(AirParam::HumidityTableValue(i)),
             _ => Err(()),
         }
     }
@@ -283,6 +294,8 @@ mod tests {
         all.extend(AirParam::NAMED.map(|(a, _)| Param::Air(a)));
         all.push(Param::Air(AirParam::TableHeight(3)));
         all.push(Param::Air(AirParam::TableTemperature(17)));
+        all.push(Param::Air(AirParam::HumidityTableHeight(0)));
+        all.push(Param::Air(AirParam::HumidityTableValue(5)));
         for p in all {
             assert_eq!(p.to_string().parse::<Param>(), Ok(p));
         }
@@ -305,6 +318,9 @@ mod tests {
             "air.temperature.table[1][2]",
             "air.temperature.table[][1]",
             "air.temperature.table[1]",
+            "air.humidity.table[1][2]",
+            "air.humidity.table[x][0]",
+            "air.humidity.table",
             "air.Pressure",
         ] {
             assert!(bad.parse::<Param>().is_err(), "{bad:?} accepted");

@@ -31,6 +31,10 @@ pub struct Input {
 /// model, real air), else the error naming the kind.
 pub fn previewable(medium: &Medium) -> std::result::Result<(), FieldError> {
     match medium {
+        Medium::Air(m) if m.air.humidity.table().is_some() => Err(FieldError::new(
+            "medium.air.humidity",
+            "the previewer's tables take one relative humidity; this air has a humidity table (use `mirage render`, or give one number)",
+        )),
         Medium::Logistic(_) | Medium::Air(_) => Ok(()),
         other => Err(FieldError::new(
             "medium",

@@ -59,7 +59,9 @@ use super::layout::{MEDIUM_AIR, Params};
 use crate::medium::air::hydrostatic::MAX_SPACING as HYDROSTATIC_SPACING;
 use crate::medium::air::refractivity::refractivity_partials;
 use crate::medium::air::standard::{US1976_BREAKS, US1976_TOP};
-use crate::medium::air::{AirField, AirMedium, AirState, COLDEST, Formula, KELVIN, Lapse};
+use crate::medium::air::{
+    AirField, AirMedium, AirState, COLDEST, Formula, Humidity, KELVIN, Lapse,
+};
 use num_dual::Dual64;
 
 /// The widest height interval of the profile table (m).
@@ -195,7 +197,11 @@ fn formula_corner(m: &AirMedium, kelvin: f64, pressure: f64) -> [f64; 4] {
     let state = AirState {
         celsius: Dual64::from_re(kelvin - KELVIN),
         pressure: Dual64::new(pressure, 1.0),
-        humidity: Dual64::from_re(m.air.humidity),
+        // One humidity: `input::previewable` refuses a humidity table.
+        humidity: Dual64::from_re(match &m.air.humidity {
+            Humidity::Constant(h) => *h,
+            Humidity::Table(_) => f64::NAN,
+        }),
         wavelength_nm: Dual64::from_re(m.air.wavelength),
         co2_ppm: Dual64::from_re(m.air.co2),
     };

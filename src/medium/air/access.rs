@@ -1,14 +1,15 @@
 //! Real air's parameters by path: listing, reading, writing and mapping
 //! (to dual numbers), in one fixed order.
 
-use super::model::{Air, AirHotSpot, AirMedium, Exponential, Lapse, Step, Temperature};
+use super::model::{Air, AirHotSpot, AirMedium, Exponential, Humidity, Lapse, Step, Temperature};
 use super::refractivity::Formula;
 use crate::error::FieldError;
 use crate::medium::{AirParam, HotField, Param};
 
 impl<T: Copy> AirMedium<T> {
     /// Every parameter with its value: the temperature's (base, lapse,
-    /// exponential, inversion, table rows), pressure, humidity, wavelength,
+    /// exponential, inversion, table rows), pressure, humidity (the number,
+    /// or the humidity table's rows as the temperature table's), wavelength,
     /// CO₂, the Gladstone–Dale constant, then each hot spot's x, z, radius,
     /// edge, delta, scale_height.
     pub fn params(&self) -> Vec<(Param, T)> {
@@ -35,7 +36,15 @@ impl<T: Copy> AirMedium<T> {
             push(AirParam::TableTemperature(i), row[1]);
         }
         push(AirParam::Pressure, self.air.pressure);
-        push(AirParam::Humidity, self.air.humidity);
+        match &self.air.humidity {
+            Humidity::Constant(h) => push(AirParam::Humidity, *h),
+            Humidity::Table(rows) => {
+                for (i, row) in rows.iter().enumerate() {
+                    push(AirParam::HumidityTableHeight(i), row[0]);
+                    push(AirParam::HumidityTableValue(i), row[1]);
+                }
+            }
+        }
         push(AirParam::Wavelength, self.air.wavelength);
         push(AirParam::Co2, self.air.co2);
         if let Formula::GladstoneDale(k) = self.air.refractivity {
@@ -97,7 +106,18 @@ impl<T: Copy> AirMedium<T> {
                     .and_then(|r| r.get_mut(i))
                     .map(|r| &mut r[1]),
                 AirParam::Pressure => Some(&mut air.pressure),
-                AirParam::Humidity => Some(&mut air.humidity),
+                AirParam::Humidity => match &mut air.humidity {
+                    Humidity::Constant(h) => Some(h),
+                    Humidity::Table(_) => None,
+                },
+                AirParam::HumidityTableHeight(i) => match &mut air.humidity {
+                    Humidity::Table(rows) => rows.get_mut(i).map(|r| &mut r[0]),
+                    Humidity::Constant(_) => None,
+                },
+                AirParam::HumidityTableValue(i) => match &mut air.humidity {
+                    Humidity::Table(rows) => rows.get_mut(i).map(|r| &mut r[1]),
+                    Humidity::Constant(_) => None,
+                },
                 AirParam::Wavelength => Some(&mut air.wavelength),
                 AirParam::Co2 => Some(&mut air.co2),
                 AirParam::GladstoneDale => match &mut air.refractivity {
@@ -136,7 +156,22 @@ impl<T: Copy> AirMedium<T> {
                 AirParam::GladstoneDale => {
                     "the refractivity is not `{\"gladstone_dale\": K}`".to_string()
                 }
-                AirParam::Pressure | AirParam::Humidity | AirParam::Wavelength | AirParam::Co2 => {
+                AirParam::Humidity => {
+                    "the humidity is a table: its rows are `air.humidity.table[i][0]` (m) and `[i][1]` (0…1)".to_string()
+                }
+                AirParam::HumidityTableHeight(i) | AirParam::HumidityTableValue(i) => {
+                    match &self.air.humidity {
+                        Humidity::Constant(_) => {
+                            "the humidity is one number (`air.humidity`), not a `table`".to_string()
+                        }
+                        Humidity::Table(rows) => format!(
+                            "the humidity table has {} rows (indices 0 to {}), not row {i}",
+                            rows.len(),
+                            rows.len().saturating_sub(1)
+                        ),
+                    }
+                }
+                AirParam::Pressure | AirParam::Wavelength | AirParam::Co2 => {
                     "always present".to_string()
                 }
             },
@@ -193,7 +228,20 @@ impl<T: Copy> AirMedium<T> {
             temperature,
             pressure: g(AirParam::Pressure, a.pressure),
             hydrostatic: a.hydrostatic,
-            humidity: g(AirParam::Humidity, a.humidity),
+            humidity: match &a.humidity {
+                Humidity::Constant(h) => Humidity::Constant(g(AirParam::Humidity, *h)),
+                Humidity::Table(rows) => Humidity::Table(
+                    rows.iter()
+                        .enumerate()
+                        .map(|(i, r)| {
+                            [
+                                g(AirParam::HumidityTableHeight(i), r[0]),
+                                g(AirParam::HumidityTableValue(i), r[1]),
+                            ]
+                        })
+                        .collect(),
+                ),
+            },
             wavelength: g(AirParam::Wavelength, a.wavelength),
             co2: g(AirParam::Co2, a.co2),
             refractivity: match a.refractivity {

@@ -2,7 +2,7 @@
 //! the path of its field relative to the medium.
 
 use super::field::{AirField, COLDEST, HOTTEST, KELVIN};
-use super::model::{AirMedium, Lapse};
+use super::model::{AirMedium, Humidity, Lapse};
 use super::refractivity::Formula;
 use crate::error::FieldError;
 use crate::math::V3;
@@ -20,6 +20,47 @@ pub const MAX_GLADSTONE_DALE: f64 = 1.0;
 pub const MAX_PRESSURE: f64 = 1.0e7;
 /// The heights over which the profile must be air (m).
 const CHECKED_TOP: f64 = 11_000.0;
+
+/// A humidity table's rules: at least two rows, heights strictly
+/// increasing, every relative humidity in [0, 1].
+fn check_humidity_table(rows: &[[f64; 2]]) -> Result<(), FieldError> {
+    let bad =
+        |p: AirParam, message: String| Err(FieldError::new(Param::Air(p).to_string(), message));
+    if rows.len() < 2 {
+        return Err(FieldError::new(
+            "air.humidity.table",
+            format!(
+                "a table needs at least two rows [height, relative humidity], got {}",
+                rows.len()
+            ),
+        ));
+    }
+    for (i, w) in rows.windows(2).enumerate() {
+        if w[1][0] <= w[0][0] {
+            return bad(
+                AirParam::HumidityTableHeight(i + 1),
+                format!(
+                    "the heights must be strictly increasing: row {} has {} m after {} m",
+                    i + 1,
+                    w[1][0],
+                    w[0][0]
+                ),
+            );
+        }
+    }
+    for (i, r) in rows.iter().enumerate() {
+        if !(0.0..=1.0).contains(&r[1]) {
+            return bad(
+                AirParam::HumidityTableValue(i),
+                format!(
+                    "the relative humidity must lie in [0, 1] (0.2 is 20 %), got {}",
+                    r[1]
+                ),
+            );
+        }
+    }
+    Ok(())
+}
 
 impl AirMedium<f64> {
     /// Checks every rule; the first violation is returned with its path.
@@ -50,14 +91,16 @@ impl AirMedium<f64> {
                 ),
             );
         }
-        if !(0.0..=1.0).contains(&air.humidity) {
-            return bad(
-                Param::Air(AirParam::Humidity),
-                format!(
-                    "the relative humidity must lie in [0, 1] (0.2 is 20 %), got {}",
-                    air.humidity
-                ),
-            );
+        match &air.humidity {
+            Humidity::Constant(h) => {
+                if !(0.0..=1.0).contains(h) {
+                    return bad(
+                        Param::Air(AirParam::Humidity),
+                        format!("the relative humidity must lie in [0, 1] (0.2 is 20 %), got {h}"),
+                    );
+                }
+            }
+            Humidity::Table(rows) => check_humidity_table(rows)?,
         }
         let (lo, hi) = WAVELENGTH_RANGE;
         if !(lo..=hi).contains(&air.wavelength) {

@@ -3,9 +3,14 @@
 //! ```text
 //! T(p)  = T_u(h) + Σ_j δT_j · w_j(x, z) · e^(−h⁺/H_j)          (h⁺ = max(h, 0))
 //! P(h)  = P₀ · exp(−(gM/R) ∫₀^h dh'/T_u(h'))   (hydrostatic; else P₀)
-//! δ     = f(T, P; humidity, λ, CO₂)               (Ciddor, Edlén or Gladstone–Dale)
-//! ∇δ    = ∂f/∂T · ∇T + ∂f/∂P · (dP/dh) ŷ
+//! δ     = f(T, P, RH(h); λ, CO₂)                  (Ciddor, Edlén or Gladstone–Dale)
+//! ∇δ    = ∂f/∂T · ∇T + (∂f/∂P · dP/dh + ∂f/∂RH · dRH/dh) ŷ
 //! ```
+//!
+//! RH is one number, or a humidity table's shape-preserving cubic in h (the
+//! temperature table's interpolant, held beyond the end rows); with one
+//! number dRH/dh = 0 and the last term is not computed at all, so such air
+//! gives exactly the numbers it gave before humidity tables existed.
 //!
 //! T_u is the horizontally uniform profile (analytic terms or the table's
 //! shape-preserving cubic); the pressure follows it alone, as the contract
@@ -21,9 +26,11 @@
 //! temperature held at that floor so that it stays finite.
 
 use super::hydrostatic::{Hydrostatic, MAX_SPACING};
-use super::model::{AirMedium, DEFAULT_BASE, Lapse};
+use super::model::{AirMedium, DEFAULT_BASE, Humidity, Lapse};
 use super::pchip::Pchip;
-use super::refractivity::{AirState, Formula, STANDARD_PRESSURE, refractivity_partials};
+use super::refractivity::{
+    AirState, Formula, STANDARD_PRESSURE, humidity_partial, refractivity_partials,
+};
 use super::standard::{US1976_BREAKS, US1976_TOP, us1976_offset};
 use crate::math::{Real, V3, sigmoid};
 use crate::medium::IndexField;
@@ -105,6 +112,15 @@ impl<T: Real> Profile<T> {
     }
 }
 
+/// The relative humidity, compiled.
+#[derive(Clone, Debug)]
+enum Moisture<T> {
+    /// One number everywhere.
+    Constant(T),
+    /// A measured table (0…1), interpolated.
+    Table(Pchip<T>),
+}
+
 #[derive(Clone, Debug)]
 enum Pressure<T> {
     Constant(T),
@@ -127,7 +143,7 @@ pub struct AirField<T = f64> {
     profile: Profile<T>,
     pressure: Pressure<T>,
     formula: Formula<T>,
-    humidity: T,
+    humidity: Moisture<T>,
     wavelength: T,
     co2: T,
     hotspots: Vec<HotTerm<T>>,
@@ -195,7 +211,13 @@ impl<T: Real> AirField<T> {
             profile,
             pressure,
             formula: m.air.refractivity,
-            humidity: m.air.humidity,
+            humidity: match &m.air.humidity {
+                Humidity::Constant(h) => Moisture::Constant(*h),
+                Humidity::Table(rows) => {
+                    let rows: Vec<(T, T)> = rows.iter().map(|r| (r[0], r[1])).collect();
+                    Moisture::Table(Pchip::new(&rows))
+                }
+            },
             wavelength: m.air.wavelength,
             co2: m.air.co2,
             hotspots,
@@ -260,17 +282,32 @@ impl<T: Real> AirField<T> {
 }
 
 impl<T: Real> AirField<T> {
-    /// δ and ∇δ from the temperature `t` (K) with its gradient and the
-    /// pressure with its height derivative: the temperature held inside
-    /// [−150 °C, 300 °C], then the formula and the chain rule. The last stage
-    /// of [`IndexField::delta_gradient`], apart so that the lanes kernels
-    /// (`trace::batch`) call it per lane where they have no vector form.
+    /// Whether the lanes kernels (`trace::batch`), which call
+    /// [`AirField::index_from`] without the height, evaluate this air
+    /// exactly: not with a humidity table (RH changes with height) under
+    /// Ciddor's or Edlén's formula. Callers trace such air with the scalar
+    /// tracer instead.
+    pub fn lanes_exact(&self) -> bool {
+        matches!(self.humidity, Moisture::Constant(_))
+            || matches!(self.formula, Formula::GladstoneDale(_))
+    }
+
+    /// The relative humidity (0…1) and its height derivative at h.
+    pub fn humidity(&self, h: T) -> (T, T) {
+        match &self.humidity {
+            Moisture::Constant(rh) => (*rh, T::cst(0.0)),
+            Moisture::Table(p) => p.eval(h),
+        }
+    }
+
+    /// The temperature held inside [−150 °C, 300 °C] (K), its gradient 0
+    /// where held.
     #[inline]
-    pub(crate) fn index_from(&self, t: T, grad_t: V3<T>, pressure: T, dp_dh: T) -> (T, V3<T>) {
+    fn held(t: T, grad_t: V3<T>) -> (T, V3<T>) {
         // Past the ceiling the tracers stop; hold the floor so δ stays finite.
         let floor = COLDEST + KELVIN;
         let hottest = HOTTEST + KELVIN;
-        let (t, grad_t) = if t.val() < floor {
+        if t.val() < floor {
             let z = T::cst(0.0);
             (T::cst(floor), V3::new(z, z, z))
         } else if t.val() > hottest {
@@ -280,7 +317,20 @@ impl<T: Real> AirField<T> {
             (T::cst(hottest), V3::new(z, z, z))
         } else {
             (t, grad_t)
-        };
+        }
+    }
+
+    /// δ and ∇δ from the temperature `t` (K) with its gradient and the
+    /// pressure with its height derivative: the temperature held inside
+    /// [−150 °C, 300 °C], then the formula and the chain rule. The last stage
+    /// of [`IndexField::delta_gradient`], apart so that the lanes kernels
+    /// (`trace::batch`) call it per lane where they have no vector form.
+    /// It takes no height, so it serves air of one humidity only: with a
+    /// humidity table it gives NaN (see [`AirField::lanes_exact`]), never a
+    /// silently wrong value.
+    #[inline]
+    pub(crate) fn index_from(&self, t: T, grad_t: V3<T>, pressure: T, dp_dh: T) -> (T, V3<T>) {
+        let (t, grad_t) = Self::held(t, grad_t);
         let (delta, d_dt, d_dp) = self.partials(t, pressure);
         let grad = V3::new(
             d_dt * grad_t.x,
@@ -290,10 +340,55 @@ impl<T: Real> AirField<T> {
         (delta, grad)
     }
 
+    /// [`AirField::index_from`] at height `h`, where a humidity table is
+    /// evaluated: the full last stage of [`IndexField::delta_gradient`].
+    #[inline]
+    pub(crate) fn index_at(&self, h: T, t: T, grad_t: V3<T>, pressure: T, dp_dh: T) -> (T, V3<T>) {
+        let Moisture::Table(table) = &self.humidity else {
+            return self.index_from(t, grad_t, pressure, dp_dh);
+        };
+        let (rh, drh_dh) = table.eval(h);
+        let (t, grad_t) = Self::held(t, grad_t);
+        let (delta, d_dt, d_dp) = self.partials_with(t, pressure, rh);
+        let d_drh = match self.formula {
+            Formula::GladstoneDale(_) => T::cst(0.0),
+            formula => humidity_partial(formula, &self.state(t, pressure, rh)),
+        };
+        let grad = V3::new(
+            d_dt * grad_t.x,
+            d_dt * grad_t.y + d_dp * dp_dh + d_drh * drh_dh,
+            d_dt * grad_t.z,
+        );
+        (delta, grad)
+    }
+
     /// (δ, ∂δ/∂T, ∂δ/∂P) of the formula at temperature `t` (K, inside the
-    /// held range) and `pressure`.
+    /// held range) and `pressure`, with the one humidity (NaN with a
+    /// humidity table, which needs the height: [`AirField::index_at`]).
     #[inline]
     pub(crate) fn partials(&self, t: T, pressure: T) -> (T, T, T) {
+        let rh = match &self.humidity {
+            Moisture::Constant(rh) => *rh,
+            Moisture::Table(_) => T::cst(f64::NAN),
+        };
+        self.partials_with(t, pressure, rh)
+    }
+
+    /// The state of the air the formulas take.
+    #[inline]
+    fn state(&self, t: T, pressure: T, rh: T) -> AirState<T> {
+        AirState {
+            celsius: t - KELVIN,
+            pressure,
+            humidity: rh,
+            wavelength_nm: self.wavelength,
+            co2_ppm: self.co2,
+        }
+    }
+
+    /// (δ, ∂δ/∂T, ∂δ/∂P) at `t` (K), `pressure` and relative humidity `rh`.
+    #[inline]
+    fn partials_with(&self, t: T, pressure: T, rh: T) -> (T, T, T) {
         match self.formula {
             // δ = K·(P/P₀)/T: its partials in closed form (the tracer's hot
             // path for the many mirage papers that use this law).
@@ -303,16 +398,7 @@ impl<T: Real> AirField<T> {
                 let d = d_dp * pressure;
                 (d, -(d * inv_t), d_dp)
             }
-            formula => {
-                let state = AirState {
-                    celsius: t - KELVIN,
-                    pressure,
-                    humidity: self.humidity,
-                    wavelength_nm: self.wavelength,
-                    co2_ppm: self.co2,
-                };
-                refractivity_partials(formula, &state)
-            }
+            formula => refractivity_partials(formula, &self.state(t, pressure, rh)),
         }
     }
 
@@ -333,7 +419,7 @@ impl<T: Real> IndexField<T> for AirField<T> {
     fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
         let (t, grad_t) = self.kelvin(p);
         let (pressure, dp_dh) = self.pressure(p.y);
-        self.index_from(t, grad_t, pressure, dp_dh)
+        self.index_at(p.y, t, grad_t, pressure, dp_dh)
     }
 
     fn is_stratified(&self) -> bool {
@@ -447,6 +533,15 @@ fn zones<T: Real>(m: &AirMedium<T>) -> Vec<(f64, f64, f64)> {
         out.push((c - ZONE_SCALES * s, c + ZONE_SCALES * s, s));
     }
     if let Some(rows) = &t.table
+        && let (Some(first), Some(last)) = (rows.first(), rows.last())
+    {
+        let gap = rows
+            .windows(2)
+            .map(|w| (w[1][0].val() - w[0][0].val()).abs())
+            .fold(f64::INFINITY, f64::min);
+        out.push((first[0].val() - gap, last[0].val() + gap, gap));
+    }
+    if let Some(rows) = m.air.humidity.table()
         && let (Some(first), Some(last)) = (rows.first(), rows.last())
     {
         let gap = rows

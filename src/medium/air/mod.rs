@@ -8,6 +8,7 @@
 //!            + Σ_j hotspots[j].delta · w_j(x, z) · e^(−h/hotspots[j].scale_height)
 //!   (or a measured table of [h, T] rows, a shape-preserving cubic, plus hot spots)
 //! P(h)       = pressure · exp(−(gM/R)∫₀^h dh'/T_u)  (hydrostatic, over the uniform part)
+//! RH(h)      = humidity (one number) or a measured table of [h, RH] rows (the same cubic)
 //! n − 1      = Ciddor 1996 | Edlén (Birch & Downs) | Gladstone–Dale K·(P/101325)/T
 //! ```
 //!
@@ -20,6 +21,7 @@
 //! | `air.temperature.table[i][0]`, `[i][1]` | m, °C | a measured profile |
 //! | `air.pressure` | Pa | at h = 0 (101325); `hydrostatic` (true) |
 //! | `air.humidity` | – | relative, 0…1 (0) |
+//! | `air.humidity.table[i][0]`, `[i][1]` | m, – | a measured humidity profile |
 //! | `air.wavelength` | nm | vacuum (550) |
 //! | `air.co2` | ppm | by mole, Ciddor only (450) |
 //! | `air.refractivity.gladstone_dale` | K | with `{"gladstone_dale": K}` |
@@ -55,6 +57,6 @@ pub use field::{AirField, COLDEST, HOTTEST, KELVIN};
 pub(crate) use field::{LaneTerms, UniformTerms};
 pub use model::{
     Air, AirHotSpot, AirMedium, DEFAULT_BASE, DEFAULT_CO2, DEFAULT_PRESSURE, DEFAULT_WAVELENGTH,
-    Exponential, Lapse, Step, Temperature,
+    Exponential, Humidity, Lapse, Step, Temperature,
 };
 pub use refractivity::{AirState, Formula};

@@ -26,9 +26,6 @@ fn default_wavelength<T: From<f64>>() -> T {
 fn default_co2<T: From<f64>>() -> T {
     T::from(DEFAULT_CO2)
 }
-fn default_zero<T: From<f64>>() -> T {
-    T::from(0.0)
-}
 fn default_edge<T: From<f64>>() -> T {
     T::from(10.0)
 }
@@ -68,9 +65,9 @@ pub struct Air<T = f64> {
     /// Whether the pressure falls hydrostatically with height (else constant).
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub hydrostatic: bool,
-    /// Relative humidity, 0…1.
-    #[serde(default = "default_zero")]
-    pub humidity: T,
+    /// Relative humidity, 0…1: one number, or a measured table by height.
+    #[serde(default)]
+    pub humidity: Humidity<T>,
     /// Vacuum wavelength (nm).
     #[serde(default = "default_wavelength")]
     pub wavelength: T,
@@ -250,4 +247,82 @@ pub struct AirHotSpot<T = f64> {
     pub delta: T,
     /// The height over which it falls by 1/e (m, > 0).
     pub scale_height: T,
+}
+
+/// The relative humidity (0…1): one number everywhere (the file's plain
+/// number, default 0), or a measured profile `{"table": [[h, rh], ...]}`
+/// interpolated by height as `temperature.table` is (the same
+/// shape-preserving cubic, held beyond the end rows).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Humidity<T = f64> {
+    /// One relative humidity everywhere.
+    Constant(T),
+    /// Rows `[h (m), rh (0…1)]`, heights strictly increasing.
+    Table(Vec<[T; 2]>),
+}
+
+impl<T: From<f64>> Default for Humidity<T> {
+    fn default() -> Self {
+        Humidity::Constant(T::from(0.0))
+    }
+}
+
+impl<T> Humidity<T> {
+    /// The table's rows, if this is a table.
+    pub fn table(&self) -> Option<&[[T; 2]]> {
+        match self {
+            Humidity::Constant(_) => None,
+            Humidity::Table(rows) => Some(rows),
+        }
+    }
+}
+
+impl<T: Serialize> Serialize for Humidity<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        match self {
+            Humidity::Constant(v) => v.serialize(s),
+            Humidity::Table(rows) => {
+                let mut st = s.serialize_struct("Humidity", 1)?;
+                st.serialize_field("table", rows)?;
+                st.end()
+            }
+        }
+    }
+}
+
+impl<'de, T: Deserialize<'de> + From<f64>> Deserialize<'de> for Humidity<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + From<f64>> Visitor<'de> for V<T> {
+            type Value = Humidity<T>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(
+                    "a relative humidity 0…1 (a number) or {\"table\": [[height, humidity], ...]}",
+                )
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(Humidity::Constant(T::from(v)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(Humidity::Constant(T::from(v as f64)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(Humidity::Constant(T::from(v as f64)))
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut rows: Option<Vec<[T; 2]>> = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        "table" if rows.is_none() => rows = Some(map.next_value()?),
+                        "table" => return Err(de::Error::duplicate_field("table")),
+                        other => return Err(de::Error::unknown_field(other, &["table"])),
+                    }
+                }
+                rows.map(Humidity::Table)
+                    .ok_or_else(|| de::Error::missing_field("table"))
+            }
+        }
+        d.deserialize_any(V(std::marker::PhantomData))
+    }
 }

@@ -171,6 +171,24 @@ pub fn refractivity_partials<U: Real>(formula: Formula<U>, air: &AirState<U>) ->
     (by_t.re, by_t.eps, by_p.eps)
 }
 
+/// ∂(n − 1)/∂RH of `air` by `formula` (per unit of relative humidity, the
+/// other inputs fixed), exact to rounding as [`refractivity_partials`]: for a
+/// humidity that changes with height. 0 for Gladstone–Dale, which has no
+/// humidity.
+pub fn humidity_partial<U: Real>(formula: Formula<U>, air: &AirState<U>) -> U {
+    if let Formula::GladstoneDale(_) = formula {
+        return U::cst(0.0);
+    }
+    let by_rh = refractivity(
+        formula.map(Dual::from_re),
+        &AirState {
+            humidity: Dual::new(air.humidity, U::one()),
+            ..air.map(Dual::from_re)
+        },
+    );
+    by_rh.eps
+}
+
 /// S = 1/λ² in µm⁻², λ given in nm.
 fn wavenumber_squared<U: Real>(wavelength_nm: U) -> U {
     (wavelength_nm * 1e-3).powi(2).recip()
