@@ -26,6 +26,7 @@ pub mod refraction;
 pub mod refractivity;
 pub mod render;
 pub mod sky;
+pub mod sounding;
 pub mod trace;
 pub mod tradeoff;
 
@@ -101,6 +102,8 @@ pub enum Command {
     Air(air::AirOptions),
     /// Tabulate the astronomical refraction near the horizon, the dip of the horizon and k, through real air.
     Refraction(refraction::RefractionOptions),
+    /// Read a radiosonde or mast profile (IGRA 2, Wyoming, CSV) into a real-air medium.
+    Sounding(sounding::SoundingOptions),
     /// Preview a scene (or a problem's medium) live on the GPU, and edit the air.
     #[cfg(feature = "preview")]
     Preview(preview::PreviewOptions),
@@ -178,6 +181,7 @@ impl Cli {
             Command::Refractivity(o) => refractivity::run(o).map(|_| ()),
             Command::Air(o) => air::run(o).map(|_| ()),
             Command::Refraction(o) => refraction::run(o).map(|_| ()),
+            Command::Sounding(o) => sounding::run(o).map(|_| ()),
             #[cfg(feature = "preview")]
             Command::Preview(o) => preview::run(o),
         }
