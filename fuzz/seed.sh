@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 root=..
 c=corpus
-mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured"
+mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured" "$c/sounding"
 
 # Problem files, as they are.
 for f in "$root"/problems/*.json "$root"/problems/atmospheres/*.json "$root"/problems/grow/*.json; do
@@ -52,5 +52,12 @@ done
 # The structured target starts from a few fixed byte strings.
 for n in 0 1 2 3; do
     head -c 256 /dev/zero | tr '\0' "\\$((n + 1))" >"$c/structured/fill-$n"
+done
+# Soundings: the test files, each with a format byte (0 IGRA 2, 1 Wyoming,
+# 2 CSV, 3 inferred) and a site byte (even: no site height).
+for f in "$root"/tests/data/sounding/*; do
+    for n in 0 1 2 3; do
+        { printf "\\$((n))"; printf '\\0'; cat "$f"; } >"$c/sounding/$n-$(basename "$f")"
+    done
 done
 echo "seeded: $(find "$c" -type f | wc -l) files in $c/"
