@@ -57,7 +57,7 @@ done
 # 2 CSV, 3 inferred) and a site byte (even: no site height).
 for f in "$root"/tests/data/sounding/*; do
     for n in 0 1 2 3; do
-        { printf "\\$((n))"; printf '\\0'; cat "$f"; } >"$c/sounding/$n-$(basename "$f")"
+        { printf "\\$((n))"; printf '\0'; cat "$f"; } >"$c/sounding/$n-$(basename "$f")"
     done
 done
 echo "seeded: $(find "$c" -type f | wc -l) files in $c/"
