@@ -283,7 +283,7 @@ impl<T: Real> AirField<T> {
 
 impl<T: Real> AirField<T> {
     /// Whether the lanes kernels (`trace::batch`), which call
-    /// [`AirField::index_from`] without the height, evaluate this air
+    /// `AirField::index_from` without the height, evaluate this air
     /// exactly: not with a humidity table (RH changes with height) under
     /// Ciddor's or Edlén's formula. Callers trace such air with the scalar
     /// tracer instead.
