@@ -4,6 +4,7 @@
 
 use crate::medium::{Field, IndexField, Medium, PairFields};
 use crate::problem::{Problem, TraceSpec};
+use crate::sightline::Sightline;
 use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
 use crate::trace::{End, RayState, Stats, Trace};
 use serde::Serialize;
@@ -32,6 +33,10 @@ pub struct PairReport {
     pub arc_length: f64,
     /// Integration statistics.
     pub stats: Stats,
+    /// Over the round earth: the line of sight's elevations, refraction,
+    /// k, horizon and clearance ([`Sightline`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sightline: Option<Sightline>,
 }
 
 /// Totals over all pairs.
@@ -80,7 +85,7 @@ pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
         .pairs
         .iter()
         .zip(&traces)
-        .map(|(pair, t)| report_of(pair, t))
+        .map(|(pair, t)| report_of(pair, t, problem.trace.earth))
         .collect();
     let mut totals = Totals::default();
     let mut stats = Stats::default();
@@ -158,8 +163,9 @@ fn trace_all(problem: &Problem, fields: &PairFields) -> Vec<Trace> {
 }
 
 /// A pair's report from its trace.
-fn report_of(pair: &crate::pair::PointPair, t: &Trace) -> PairReport {
+fn report_of(pair: &crate::pair::PointPair, t: &Trace, earth: crate::trace::Earth) -> PairReport {
     let r = (t.endpoint - pair.target()) * pair.weight;
+    let sightline = Sightline::traced(pair, earth, t.endpoint.to_array());
     PairReport {
         endpoint: t.endpoint.to_array(),
         target: pair.target,
@@ -171,6 +177,7 @@ fn report_of(pair: &crate::pair::PointPair, t: &Trace) -> PairReport {
         end: t.end,
         arc_length: t.arc_length,
         stats: t.stats,
+        sightline,
     }
 }
 
@@ -188,5 +195,5 @@ pub fn pair_report<F: IndexField + ?Sized>(
     path: Option<&mut Vec<RayState>>,
 ) -> PairReport {
     let (t, _) = pair.evaluate::<f64, _>(field, options, path);
-    report_of(pair, &t)
+    report_of(pair, &t, options.earth)
 }

@@ -26,6 +26,7 @@ mod python;
 pub mod refraction;
 pub mod render;
 pub mod scene;
+pub mod sightline;
 pub mod trace;
 pub mod tradeoff;
 pub mod validate;

@@ -952,11 +952,13 @@ fn geographic_fields_are_checked_by_name() {
         .arg(&input)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
 
-    let pair = |extra: &str| {
-        format!(r#"{{ "origin": [0, 23.42, 0], {extra} "target": {PLACE} }}"#)
-    };
+    let pair = |extra: &str| format!(r#"{{ "origin": [0, 23.42, 0], {extra} "target": {PLACE} }}"#);
     for (text, expected) in [
         (
             geo(
@@ -986,7 +988,10 @@ fn geographic_fields_are_checked_by_name() {
             ),
             vec!["site", "heigth"],
         ),
-        (geo("", &pair(r#""elevation": 0,"#)), vec!["pairs[0].target", "needs a `site`"]),
+        (
+            geo("", &pair(r#""elevation": 0,"#)),
+            vec!["pairs[0].target", "needs a `site`"],
+        ),
         (
             geo(
                 SITE,
@@ -1029,6 +1034,13 @@ fn geographic_fields_are_checked_by_name() {
                 r#"{ "origin": [0, 23.42], "elevation": 0, "target": [0, 1, 900] }"#,
             ),
             vec!["pairs[0].origin"],
+        ),
+        (
+            geo(
+                r#""residual": "angles", "site": { "latitude": 10, "longitude": 1 },"#,
+                &pair(r#""elevation": 0,"#),
+            ),
+            vec!["residual", "angles"],
         ),
     ] {
         rejects(&text, &expected.to_vec());

@@ -15,8 +15,6 @@
 //! `python3` that imports `geographiclib`; else the test is skipped loudly,
 //! or fails under `MIRAGE_REQUIRE_MITSUBA=1` (as `.ci/run` sets).
 
-mod common;
-
 use mirage::geo::{GeoPoint, Site};
 use mirage::math::SplitMix64;
 use std::io::Write as _;
@@ -25,7 +23,7 @@ use std::process::{Command, Stdio};
 
 /// A Python that imports `geographiclib`.
 fn python() -> Option<PathBuf> {
-    let venv = common::root().join("notebooks/.venv/bin/python");
+    let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("notebooks/.venv/bin/python");
     let candidates = [venv, PathBuf::from("python3")];
     for p in candidates {
         let ok = Command::new(&p)
@@ -40,7 +38,8 @@ fn python() -> Option<PathBuf> {
     if std::env::var("MIRAGE_REQUIRE_MITSUBA").is_ok_and(|v| v == "1") {
         panic!("GeographicLib oracle: MIRAGE_REQUIRE_MITSUBA=1 but {m}");
     }
-    common::loud(&format!("SKIPPED: the GeographicLib oracle: {m}"));
+    let bar = "=".repeat(78);
+    eprintln!("\n{bar}\nSKIPPED: the GeographicLib oracle: {m}\n{bar}\n");
     None
 }
 

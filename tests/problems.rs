@@ -43,11 +43,20 @@ fn every_bundled_problem_loads_traces_and_is_documented() {
     }
 }
 
+/// Bundled problems of measured sightings, not traced from a known air:
+/// their fit has a residual (`tests/maine.rs` checks what it finds).
+const MEASURED: [&str; 1] = ["maine-surveyor.json"];
+
 #[test]
 fn every_bundled_problem_fits() {
     for f in problem_files() {
         let p = Problem::load(&f).unwrap();
         let r = mirage::fit::fit(&p, None).unwrap();
+        if MEASURED.iter().any(|m| f.ends_with(m)) {
+            let start = trace_pairs(&p, &p.medium).totals.objective;
+            assert!(r.totals.objective < start, "{}", f.display());
+            continue;
+        }
         assert!(
             r.totals.objective < 1e-12,
             "{}: F = {:e} after {:?}",

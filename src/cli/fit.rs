@@ -253,8 +253,9 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
     let _ = writeln!(s, "stopped: {}", sv.stop_reason);
     let _ = writeln!(
         s,
-        "objective F = {:.6e} m² ({} target {:.1e})   summed distance = {:.4e} m   largest = {:.4e} m",
+        "objective F = {:.6e} {} ({} target {:.1e})   summed distance = {:.4e} {}   largest = {:.4e} m",
         r.totals.objective,
+        super::sightline::objective_unit(problem),
         match (sv.reached_target, sv.target_enforced) {
             (true, _) => "meets",
             (false, true) => "ABOVE",
@@ -262,6 +263,7 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
         },
         sv.target_objective,
         r.totals.summed_distance,
+        super::sightline::summed_unit(problem),
         r.totals.max_distance
     );
     if !r.parameters.is_empty() {
@@ -318,6 +320,7 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
     if !flagged.is_empty() {
         let _ = writeln!(s, "flags: {}", flagged.join(", "));
     }
+    s.push_str(&super::sightline::sightline_table(&r.pairs));
     if let Some(g) = &r.grow {
         s.push_str(&grow_summary(g));
     }

@@ -25,6 +25,7 @@ pub mod rays;
 pub mod refraction;
 pub mod refractivity;
 pub mod render;
+pub(crate) mod sightline;
 pub mod sky;
 pub mod sounding;
 pub mod trace;

@@ -114,10 +114,15 @@ pub fn trace_table(problem: &Problem, report: &TraceReport, full: bool) -> Strin
             row(&mut s, i);
         }
     }
+    s.push_str(&super::sightline::sightline_table(&report.pairs));
     let _ = writeln!(
         s,
-        "objective F = {:.6e} m²   summed distance = {:.6e} m   largest distance = {:.6e} m",
-        report.totals.objective, report.totals.summed_distance, report.totals.max_distance
+        "objective F = {:.6e} {}   summed distance = {:.6e} {}   largest distance = {:.6e} m",
+        report.totals.objective,
+        super::sightline::objective_unit(problem),
+        report.totals.summed_distance,
+        super::sightline::summed_unit(problem),
+        report.totals.max_distance
     );
     s
 }

@@ -43,4 +43,4 @@ mod site;
 
 pub use angle::{Angle, AngleParseError, format_dms};
 pub use horizon::Horizon;
-pub use site::{GeoPoint, Point, Site};
+pub use site::{GeoPoint, HEIGHT_RANGE, Point, Site};

@@ -77,6 +77,38 @@ pub struct ProblemFile {
     /// geographic points.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub site: Option<Site>,
+    /// What a pair's residual measures: the miss in metres (`distance`, the
+    /// default) or in angle (`angle`: the miss over the pair's range).
+    #[serde(default, skip_serializing_if = "Residual::is_distance")]
+    pub residual: Residual,
+}
+
+/// What a pair's residual measures (`docs/geo.md`, "Residuals in angle").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Residual {
+    /// r = w·(endpoint − target), metres.
+    #[default]
+    Distance,
+    /// r = w·(endpoint − target) / |target − origin|, radians inside
+    /// (arcseconds in reports and in `noise`).
+    Angle,
+}
+
+impl Residual {
+    /// Whether it is the default, [`Residual::Distance`].
+    pub fn is_distance(&self) -> bool {
+        *self == Residual::Distance
+    }
+
+    /// A noise σ as files and flags give it (metres; arcseconds for angle
+    /// residuals) in the residual's own unit (metres; radians).
+    pub fn noise_in_residual_units(self, sigma: f64) -> f64 {
+        match self {
+            Residual::Distance => sigma,
+            Residual::Angle => sigma / crate::sightline::ARCSEC_PER_RADIAN,
+        }
+    }
 }
 
 /// A validated problem.
@@ -105,6 +137,9 @@ pub struct Problem {
     pub trace_spec: TraceSpec,
     /// Solver settings.
     pub solver: SolverSettings,
+    /// What a residual measures; with [`Residual::Angle`] each pair's
+    /// weight was divided by its range |target − origin| at load.
+    pub residual: Residual,
 }
 
 /// The ground of a file with `earth` and `site` sections: the sphere of
@@ -155,6 +190,11 @@ impl Problem {
                 .and_then(|p| p.validate().map(|()| p))
                 .and_then(|p| p.validate_on(earth).map(|()| p))
                 .map_err(|e| e.within(&format!("pairs[{i}]")).in_file(path))?;
+            let mut resolved = resolved;
+            if file.residual == Residual::Angle {
+                // r = w·(e − t)/|t − o|: the miss as an angle seen from the origin.
+                resolved.weight /= (resolved.target() - resolved.origin()).norm();
+            }
             pairs.push(resolved);
             if pair.wavelength.is_some() && !file.medium.is_dispersive() {
                 return Err(bad(
@@ -259,6 +299,7 @@ impl Problem {
             trace,
             trace_spec,
             solver,
+            residual: file.residual,
         })
     }
 }

@@ -33,7 +33,10 @@ impl Criterion {
     /// (then every pair must have one, its own or the global one).
     pub fn of(problem: &Problem, noise: Option<f64>) -> Result<Criterion> {
         let m = 2 * problem.pairs.len();
-        let own = |i: usize| problem.pair_noise.get(i).copied().flatten();
+        // σ in the residual's unit (arcseconds → radians for angle residuals).
+        let unit = |v: f64| problem.residual.noise_in_residual_units(v);
+        let noise = noise.map(unit);
+        let own = |i: usize| problem.pair_noise.get(i).copied().flatten().map(unit);
         let with_own = (0..problem.pairs.len())
             .filter(|&i| own(i).is_some())
             .count();
