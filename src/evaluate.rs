@@ -2,7 +2,7 @@
 //! residual and flags, and the totals F, summed and largest distance. This is
 //! what `mirage trace` writes and what a fit result reports at its end point.
 
-use crate::medium::{Field, IndexField, Medium, PairFields};
+use crate::medium::{IndexField, Medium, PairFields};
 use crate::problem::{Problem, TraceSpec};
 use crate::sightline::Sightline;
 use crate::trace::batch::{BatchOptions, RayJob, trace_batch_into};
@@ -106,34 +106,6 @@ pub fn trace_pairs(problem: &Problem, medium: &Medium) -> TraceReport {
     }
 }
 
-/// Traces `jobs` into `out` as [`trace_batch_into`] does, except for air
-/// the SIMD lanes do not evaluate exactly (a humidity table, see
-/// `AirField::lanes_exact`): that goes through the general scalar tracer,
-/// job by job with the same options, as the batch itself does for the
-/// analytic kind, so the results mean the same.
-///
-/// # Panics
-/// If `out.len() != jobs.len()`.
-pub fn trace_jobs(field: &Field, jobs: &[RayJob], batch: &BatchOptions, out: &mut [Trace]) {
-    match field {
-        Field::Air(air) if !air.lanes_exact() => {
-            assert_eq!(out.len(), jobs.len(), "one output slot per job");
-            let options = batch.trace_options();
-            for (job, out) in jobs.iter().zip(out) {
-                *out = crate::trace::trace::<f64, _>(
-                    field,
-                    job.origin,
-                    job.direction,
-                    Some(&job.target),
-                    &options,
-                    None,
-                );
-            }
-        }
-        _ => trace_batch_into(field, jobs, batch, out),
-    }
-}
-
 /// Rays of one lane width per parallel task: the split is fixed, so threads
 /// change who traces a chunk, not what it computes.
 const CHUNK: usize = 16;
@@ -154,7 +126,7 @@ fn trace_all(problem: &Problem, fields: &PairFields) -> Vec<Trace> {
         let mut part = vec![Trace::default(); members.len()];
         jobs.par_chunks(CHUNK)
             .zip(part.par_chunks_mut(CHUNK))
-            .for_each(|(jobs, part)| trace_jobs(field, jobs, &batch, part));
+            .for_each(|(jobs, part)| trace_batch_into(field, jobs, &batch, part));
         for (i, t) in members.into_iter().zip(part) {
             out[i] = t;
         }

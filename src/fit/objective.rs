@@ -8,7 +8,6 @@
 //! step sizes come from the real parts only, which freezes the step sequence for
 //! the derivative: no step-control noise, unlike finite differences.
 
-use crate::evaluate::trace_jobs;
 use crate::math::Real;
 use crate::medium::{Field, Medium, PairFields, Param};
 use crate::pair::PointPair;
@@ -183,7 +182,7 @@ impl Objective {
                     // Ctrl-C: the chunks left are skipped, and the solver's
                     // next cancellation point discards these residuals.
                     if !crate::interrupt::requested() {
-                        trace_jobs(field, jobs, &batch, part)
+                        crate::trace::batch::trace_batch_into(field, jobs, &batch, part)
                     }
                 });
             for (i, t) in members.into_iter().zip(part) {
