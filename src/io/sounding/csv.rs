@@ -4,7 +4,7 @@
 //! and `dewpoint` (°C) optional, any other column ignored. An empty cell is
 //! missing; a line starting with `#` is a comment.
 
-use super::row::{Row, at};
+use super::row::{Row, at, number};
 use crate::error::FieldError;
 
 /// The rows of `text`.
@@ -43,12 +43,7 @@ pub(super) fn read(text: &str) -> Result<Vec<Row>, FieldError> {
             let Some(text) = i.and_then(|i| record.get(i)) else {
                 return Ok(None);
             };
-            if text.is_empty() {
-                return Ok(None);
-            }
-            text.parse::<f64>()
-                .map(Some)
-                .map_err(|_| at(n, name, format!("`{text}` is not a number")))
+            number(text, n, name)
         };
         rows.push(Row {
             line: n,

@@ -23,6 +23,17 @@ pub struct Row {
 }
 
 /// An error at `line` in `column`.
+/// A cell's number: `None` when the cell is empty, else the number or an
+/// error at `line` naming `column`.
+pub(super) fn number(text: &str, line: usize, column: &str) -> Result<Option<f64>, FieldError> {
+    if text.is_empty() {
+        return Ok(None);
+    }
+    text.parse::<f64>()
+        .map(Some)
+        .map_err(|_| at(line, column, format!("`{text}` is not a number")))
+}
+
 pub(super) fn at(line: usize, column: &str, message: impl Into<String>) -> FieldError {
     FieldError::new(format!("line {line}, {column}"), message)
 }

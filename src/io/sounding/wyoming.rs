@@ -9,7 +9,7 @@
 //!
 //! Read: PRES (hPa), HGHT (m), TEMP (°C), DWPT (°C), RELH (%).
 
-use super::row::{Row, at};
+use super::row::{Row, at, number};
 use crate::error::FieldError;
 
 /// Whether `line` is the table's header line.
@@ -81,13 +81,7 @@ pub(super) fn read(text: &str) -> Result<Vec<Row>, FieldError> {
                     "the line is not plain ASCII where this column lies",
                 )
             })?;
-            let text = text.trim();
-            if text.is_empty() {
-                return Ok(None);
-            }
-            text.parse::<f64>()
-                .map(Some)
-                .map_err(|_| at(n, name, format!("`{text}` is not a number")))
+            number(text.trim(), n, name)
         };
         rows.push(Row {
             line: n,
