@@ -1046,3 +1046,163 @@ fn geographic_fields_are_checked_by_name() {
         rejects(&text, &expected.to_vec());
     }
 }
+
+/// A scene with geographic fields: `camera.position`/`look_at` as places,
+/// `elevation`/`azimuth` for the view, objects standing `at` a place.
+fn geo_scene(site: &str, camera: &str, objects: &str) -> String {
+    format!(
+        r#"{{ {site}
+             "camera": {{ {camera}, "vertical_fov": 2, "width": 16, "height": 9 }},
+             "medium": {{ "air": {{ "temperature": {{ "base": 15, "lapse": -0.0065 }} }} }},
+             "ground": {{ "albedo": [0.2, 0.3, 0.4] }},
+             "objects": [ {objects} ],
+             "trace": {{ "step": 200, "max_distance": 30000 }} }}"#
+    )
+}
+
+#[test]
+fn geographic_scene_fields_are_checked_by_name() {
+    let render = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("scene.json");
+        std::fs::write(&input, text).unwrap();
+        let output = dir.path().join("out.png");
+        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+            .arg("render")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        (run.status.code(), stderr, input, output.exists())
+    };
+    const SITE: &str = r#""site": { "latitude": 43.28, "longitude": 5.37, "height": 160 },"#;
+    const CAMERA: &str = r#""position": [0, 164, 0], "elevation": "-0°10'", "azimuth": 250"#;
+    const HILL: &str = r#"{ "albedo": [0.5, 0.5, 0.5], "at": { "latitude": 43.25, "longitude": 5.1 },
+                            "shape": { "type": "sphere", "center": [0, -500, 0], "radius": 800 } }"#;
+    let (code, stderr, _, written) = render(&geo_scene(SITE, CAMERA, HILL));
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(written);
+    let place = r#"{ "latitude": 43.2, "longitude": 5.0, "height": 10 }"#;
+    for (text, expected) in [
+        (
+            geo_scene(
+                r#""site": { "latitude": 91, "longitude": 5 },"#,
+                CAMERA,
+                HILL,
+            ),
+            vec!["site.latitude", "91"],
+        ),
+        (
+            geo_scene("", CAMERA, HILL),
+            vec!["objects[0].at", "needs a `site`"],
+        ),
+        (
+            geo_scene(
+                "",
+                &format!(r#""position": [0, 2, 0], "look_at": {place}"#),
+                "",
+            ),
+            vec!["camera.look_at", "needs a `site`"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                &format!(r#""position": {place}, "look_at": {place}"#),
+                "",
+            ),
+            vec!["camera.position", "must differ"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                r#""position": { "latitude": -90.5, "longitude": 5 }, "elevation": 0, "azimuth": 0"#,
+                "",
+            ),
+            vec!["camera.position.latitude", "[-90, 90]"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                r#""position": { "latitude": 43.2, "longitude": 5, "heigth": 3 }, "elevation": 0, "azimuth": 0"#,
+                "",
+            ),
+            vec!["camera.position", "heigth"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                &format!(r#""position": [0, 164, 0], "look_at": {place}, "elevation": 0"#),
+                "",
+            ),
+            vec!["camera.elevation", "not both"],
+        ),
+        (
+            geo_scene(SITE, r#""position": [0, 164, 0], "elevation": 0"#, ""),
+            vec!["camera.azimuth", "missing"],
+        ),
+        (
+            geo_scene(SITE, r#""position": [0, 164, 0], "azimuth": 0"#, ""),
+            vec!["camera.elevation", "missing"],
+        ),
+        (
+            geo_scene(SITE, r#""position": [0, 164, 0]"#, ""),
+            vec!["camera.look_at", "missing"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                r#""position": [0, 164, 0], "elevation": "1°75'", "azimuth": 0"#,
+                "",
+            ),
+            vec!["camera.elevation", "minutes must lie in [0, 60)"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                r#""position": [0, 164, 0], "elevation": 90, "azimuth": 0"#,
+                "",
+            ),
+            vec!["camera.elevation", "strictly between -90 and 90"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                CAMERA,
+                r#"{ "albedo": [0.5, 0.5, 0.5], "at": { "latitude": 43.2, "longitude": 999 },
+                     "shape": { "type": "sphere", "center": [0, 0, 0], "radius": 8 } }"#,
+            ),
+            vec!["objects[0].at.longitude", "999"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                CAMERA,
+                r#"{ "albedo": [0.5, 0.5, 0.5], "at": [1, 2],
+                     "shape": { "type": "sphere", "center": [0, 0, 0], "radius": 8 } }"#,
+            ),
+            vec!["objects[0].at"],
+        ),
+        (
+            geo_scene(
+                SITE,
+                CAMERA,
+                r#"{ "albedo": [0.5, 0.5, 0.5], "at": [0, 0, 1000],
+                     "shape": { "type": "sphere", "center": [0, 0, 0], "radius": -8 } }"#,
+            ),
+            vec!["objects[0].shape.radius"],
+        ),
+    ] {
+        let (code, stderr, input, written) = render(&text);
+        assert_eq!(code, Some(2), "{expected:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(stderr.contains(&input.display().to_string()), "{stderr}");
+        for e in &expected {
+            assert!(stderr.contains(e), "{e:?} missing from: {stderr}");
+        }
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(!written, "{expected:?}: an image was written");
+    }
+}

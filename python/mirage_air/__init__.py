@@ -39,6 +39,7 @@ __all__ = [
     "Medium",
     "TraceResult",
     "FitResult",
+    "Sightlines",
     "History",
     "load",
     "trace",
@@ -153,12 +154,66 @@ def _scene(source: Source) -> Scene:
 
 
 @dataclass(frozen=True)
+class Sightlines:
+    """Each pair's line of sight over the round earth (``docs/geo.md``), one
+    entry per pair, in the pairs' order.
+
+    ``apparent_elevation``, ``geometric_elevation``, ``horizon_elevation``:
+    degrees above the origin's horizontal (the launch direction, the straight
+    line to the target, the sea's geometric horizon); ``refraction_arcsec``:
+    apparent − geometric (″); ``k``: 2·R·refraction / s, the refraction
+    coefficient the sighting implies; ``arc_distance``: s (m);
+    ``below_horizon``: the target lies below the geometric horizon;
+    ``clearance``: the straight line's least height above the sea (m);
+    ``miss_up_arcsec``: the traced ray's miss, up positive (″);
+    ``air_refraction_arcsec`` and ``air_k``: the refraction and k of the air
+    itself (the sighting's less the miss)."""
+
+    apparent_elevation: np.ndarray
+    geometric_elevation: np.ndarray
+    refraction_arcsec: np.ndarray
+    k: np.ndarray
+    arc_distance: np.ndarray
+    horizon_elevation: np.ndarray
+    below_horizon: np.ndarray
+    clearance: np.ndarray
+    miss_up_arcsec: np.ndarray
+    air_refraction_arcsec: np.ndarray
+    air_k: np.ndarray
+
+    @classmethod
+    def _of(cls, pairs: List[Dict[str, Any]]) -> Optional["Sightlines"]:
+        if not pairs or any(p.get("sightline") is None for p in pairs):
+            return None
+        s = [p["sightline"] for p in pairs]
+
+        def col(key: str, dtype: Any = np.float64) -> np.ndarray:
+            return np.array([np.nan if x.get(key) is None else x[key] for x in s], dtype=dtype)
+
+        return cls(
+            apparent_elevation=col("apparent_elevation"),
+            geometric_elevation=col("geometric_elevation"),
+            refraction_arcsec=col("refraction_arcsec"),
+            k=col("k"),
+            arc_distance=col("arc_distance"),
+            horizon_elevation=col("horizon_elevation"),
+            below_horizon=np.array([bool(x["below_horizon"]) for x in s], dtype=bool),
+            clearance=col("clearance"),
+            miss_up_arcsec=col("miss_up_arcsec"),
+            air_refraction_arcsec=col("air_refraction_arcsec"),
+            air_k=col("air_k"),
+        )
+
+
+@dataclass(frozen=True)
 class TraceResult:
     """Every pair traced through a medium (``mirage trace -o``'s report).
 
     ``endpoints``, ``targets``, ``directions``: ``(m, 3)`` float64 (metres, unit
     vectors); ``distances``: ``(m,)``; ``occluded``, ``unreachable``: ``(m,)``
-    bool; ``objective``: F = ½ Σ |r|² (m²); ``report``: the whole report."""
+    bool; ``objective``: F = ½ Σ |r|² (m², or rad² with angle residuals);
+    ``sightlines``: each line of sight over the round earth (:class:`Sightlines`;
+    ``None`` over the flat ground); ``report``: the whole report."""
 
     endpoints: np.ndarray
     targets: np.ndarray
@@ -167,6 +222,7 @@ class TraceResult:
     occluded: np.ndarray
     unreachable: np.ndarray
     objective: float
+    sightlines: Optional[Sightlines] = field(repr=False)
     report: Dict[str, Any] = field(repr=False)
 
     @classmethod
@@ -184,6 +240,7 @@ class TraceResult:
             occluded=np.array([p["occluded"] for p in pairs], dtype=bool),
             unreachable=np.array([p["unreachable"] for p in pairs], dtype=bool),
             objective=float(report["objective"]),
+            sightlines=Sightlines._of(pairs),
             report=report,
         )
 
@@ -211,8 +268,9 @@ class FitResult:
     determine it); ``objective``: F (m²); ``history``: the iterations;
     ``undetermined``: parameter combinations the pairs cannot determine;
     ``grow``: what growing the model did (each step's terms, F, criterion,
-    and why it stopped), ``None`` for a plain fit; ``report``: the whole
-    result."""
+    and why it stopped), ``None`` for a plain fit; ``sightlines``: each line
+    of sight through the fitted air over the round earth (:class:`Sightlines`,
+    ``None`` over the flat ground); ``report``: the whole result."""
 
     medium: Dict[str, Any]
     values: Dict[str, float]
@@ -221,6 +279,7 @@ class FitResult:
     history: History
     undetermined: List[Dict[str, Any]]
     grow: Optional[Dict[str, Any]]
+    sightlines: Optional[Sightlines] = field(repr=False)
     report: Dict[str, Any] = field(repr=False)
     _json: str = field(repr=False, default="")
 
@@ -250,6 +309,7 @@ class FitResult:
             history=history,
             undetermined=r["undetermined"],
             grow=r.get("grow"),
+            sightlines=Sightlines._of(r.get("pairs", [])),
             report=r,
             _json=text + "\n",
         )

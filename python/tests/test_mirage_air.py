@@ -242,3 +242,36 @@ def test_ctrl_c_interrupts_a_long_render():
     with pytest.raises(KeyboardInterrupt):
         mirage_air.render(SCENE, width=640, height=360, spp=16)
     assert time.perf_counter() - t0 < 2.0
+
+
+@needs_cli
+def test_sightlines_of_the_maine_surveyor_equal_the_cli(tmp_path):
+    path = ROOT / "problems" / "maine-surveyor.json"
+    out = tmp_path / "fit.json"
+    cli("--threads", "1", "fit", path, "-o", out, "-q")
+    ref = [p["sightline"] for p in json.loads(out.read_text())["pairs"]]
+    got = mirage_air.fit(path, threads=1).sightlines
+    assert got is not None and got.k.shape == (2,)
+    for key in ("apparent_elevation", "geometric_elevation", "refraction_arcsec", "k",
+                "clearance", "miss_up_arcsec", "air_refraction_arcsec", "air_k"):
+        assert np.array_equal(getattr(got, key), np.array([s[key] for s in ref])), key
+    # Bislin's analysis: k = 0.20 on both lines through the fitted air.
+    assert np.allclose(got.air_k, 0.20, atol=0.01)
+    assert not got.below_horizon.any()
+    # The trace of the starting air has them too; the flat ground has none.
+    assert mirage_air.trace(path).sightlines is not None
+    assert mirage_air.trace(ROOT / "problems" / "hot-road.json").sightlines is None
+
+
+def test_a_scene_by_latitude_and_longitude_loads_and_renders():
+    path = ROOT / "problems" / "scenes" / "canigou.json"
+    s = mirage_air.load(path)
+    assert isinstance(s, mirage_air.Scene)
+    assert s.to_dict()["objects"][0]["at"]["latitude"] == 42.51858
+    img = mirage_air.render(path, width=8, albedo=True, threads=1)
+    assert img.shape == (4, 8, 3) and np.isfinite(img).all()
+    doc = s.to_dict()
+    doc["site"]["latitude"] = 91
+    with pytest.raises(InputError) as e:
+        mirage_air.load(doc)
+    assert e.value.field == "site.latitude"

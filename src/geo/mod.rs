@@ -44,3 +44,19 @@ mod site;
 pub use angle::{Angle, AngleParseError, format_dms};
 pub use horizon::Horizon;
 pub use site::{GeoPoint, HEIGHT_RANGE, Point, Site};
+
+use crate::trace::{Earth, EarthSpec};
+
+/// The ground of a file with `earth` and `site` sections: the sphere of
+/// `earth.radius`; else, with a site, the sphere of WGS 84's Gaussian mean
+/// radius at the site's latitude ([`Site::gaussian_radius`]); else the flat
+/// ground. A file with a site is never flat.
+pub fn earth_of(earth: Option<EarthSpec>, site: Option<&Site>) -> Earth {
+    match (earth, site) {
+        (Some(e), _) => Earth::Round { radius: e.radius },
+        (None, Some(s)) => Earth::Round {
+            radius: s.gaussian_radius(),
+        },
+        (None, None) => Earth::Flat,
+    }
+}

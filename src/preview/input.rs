@@ -109,10 +109,13 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
     let file = SceneFile {
         name: Some(problem.name.clone()),
         description: Some(problem.description.clone()),
+        site: None,
         camera: CameraSpec {
-            position,
-            look_at,
-            up: [0.0, 1.0, 0.0],
+            position: position.into(),
+            look_at: Some(look_at.into()),
+            elevation: None,
+            azimuth: None,
+            up: Some([0.0, 1.0, 0.0]),
             vertical_fov: 2.0,
             width: BENCH_SIZE.0,
             height: BENCH_SIZE.1,

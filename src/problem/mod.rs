@@ -38,7 +38,7 @@ use crate::geo::Site;
 use crate::io::json::{parse_json, read_input};
 use crate::medium::{Medium, Param};
 use crate::pair::{PairEntry, PointPair};
-use crate::trace::{Earth, EarthSpec, TraceOptions};
+use crate::trace::{EarthSpec, TraceOptions};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -142,18 +142,7 @@ pub struct Problem {
     pub residual: Residual,
 }
 
-/// The ground of a file with `earth` and `site` sections: the sphere of
-/// `earth.radius`; else, with a site, the sphere of WGS 84's Gaussian mean
-/// radius at the site's latitude (`crate::geo`); else the flat ground.
-pub fn earth_of(earth: Option<EarthSpec>, site: Option<&Site>) -> Earth {
-    match (earth, site) {
-        (Some(e), _) => Earth::Round { radius: e.radius },
-        (None, Some(s)) => Earth::Round {
-            radius: s.gaussian_radius(),
-        },
-        (None, None) => Earth::Flat,
-    }
-}
+pub use crate::geo::earth_of;
 
 impl Problem {
     /// Reads and validates a problem file.

@@ -38,8 +38,9 @@
 //! errors, and every error names the file and the field.
 
 use super::glare::{AngularGlare, GlareSpec};
-use super::sdf::{SceneObject, validate_objects};
+use super::sdf::{SceneObject, Sdf, validate_objects};
 use crate::error::{Error, Result};
+use crate::geo::{Angle, Horizon, Point, Site, earth_of};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::Medium;
 use crate::trace::{Earth, EarthSpec};
@@ -63,13 +64,25 @@ pub const MAX_SAMPLES_PER_PIXEL: u32 = 4096;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {
-    /// Eye position (metres).
-    pub position: [f64; 3],
-    /// A point the camera looks at (the image centre).
-    pub look_at: [f64; 3],
-    /// Up direction (default +y).
-    #[serde(default = "default_up")]
-    pub up: [f64; 3],
+    /// Eye position: `[x, y, z]` (metres) or a geographic point (needs a
+    /// `site`).
+    pub position: Point,
+    /// A point the camera looks at (the image centre), local or geographic;
+    /// or leave it out and give `elevation` and `azimuth`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub look_at: Option<Point>,
+    /// Instead of `look_at`: the view's elevation above the local horizontal
+    /// at the camera (degrees, or a degrees-minutes-seconds string).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elevation: Option<Angle>,
+    /// With `elevation`: the view's azimuth, degrees from north (the frame's
+    /// z) toward east (x).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub azimuth: Option<Angle>,
+    /// Up direction (default: the local vertical at the camera, the
+    /// sphere's normal over the round earth, +y over the flat ground).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
     /// Vertical field of view, degrees.
     pub vertical_fov: f64,
     /// Image width (pixels).
@@ -78,8 +91,68 @@ pub struct CameraSpec {
     pub height: u32,
 }
 
-fn default_up() -> [f64; 3] {
-    [0.0, 1.0, 0.0]
+/// An object as a scene file gives it: a [`SceneObject`] (`name`, `albedo`,
+/// `shape`) and, optionally, `at`: the point its shape's own origin stands
+/// on.
+///
+/// With `at` (`[x, y, z]` or a geographic point), the shape is written in
+/// a frame of its own whose origin is that point and whose y axis is the
+/// local vertical there (the sphere's normal over the round earth), x and z
+/// turned with it along the great circle from the frame's origin: a
+/// mountain 250 km away is written as if it stood at the origin, upright.
+/// Without `at` the shape's coordinates are the scene's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneObjectEntry {
+    /// Optional name, for messages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Linear-RGB diffuse albedo, each channel in [0, 1].
+    pub albedo: [f64; 3],
+    /// Where the shape's origin stands (absent: the scene's origin, no turn).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Point>,
+    /// The geometry, in the frame of `at`.
+    pub shape: Sdf,
+}
+
+impl From<SceneObject> for SceneObjectEntry {
+    fn from(o: SceneObject) -> Self {
+        SceneObjectEntry {
+            name: o.name,
+            albedo: o.albedo,
+            at: None,
+            shape: o.shape,
+        }
+    }
+}
+
+/// The local vertical at `p`: the sphere's normal over the round earth
+/// (centre (0, −R, 0)), +y over the flat ground.
+fn vertical_at(p: DVec3, earth: Earth) -> DVec3 {
+    match earth {
+        Earth::Flat => DVec3::Y,
+        Earth::Round { radius } => (p + DVec3::new(0.0, radius, 0.0)).normalize(),
+    }
+}
+
+/// `shape` written in the frame standing at `p` (origin `p`, y the local
+/// vertical), in the scene's frame: turned about y × up by the angle
+/// between them, then moved to `p`.
+fn stand_at(shape: Sdf, p: DVec3, earth: Earth) -> Sdf {
+    let up = vertical_at(p, earth);
+    let axis = DVec3::Y.cross(up);
+    let s = axis.length();
+    let shape = if s > 0.0 {
+        Sdf::rotate(axis, s.atan2(up.y).to_degrees(), shape)
+    } else {
+        shape
+    };
+    if p == DVec3::ZERO {
+        shape
+    } else {
+        Sdf::translate(p, shape)
+    }
 }
 
 /// A checkerboard on the ground.
@@ -191,6 +264,10 @@ pub struct SceneFile {
     /// What the picture shows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
+    /// Where the local frame stands on the earth (needed by geographic
+    /// points; makes the earth round).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<Site>,
     /// The camera.
     pub camera: CameraSpec,
     /// The air, inline.
@@ -207,7 +284,7 @@ pub struct SceneFile {
     pub earth: Option<EarthSpec>,
     /// The objects.
     #[serde(default)]
-    pub objects: Vec<SceneObject>,
+    pub objects: Vec<SceneObjectEntry>,
     /// The sun.
     #[serde(default)]
     pub sun: SunSpec,
@@ -364,11 +441,90 @@ fn positive(path: &Path, field: &str, v: f64) -> Result<f64> {
 }
 
 impl CameraSettings {
-    /// Checks a camera section; errors name `camera.<field>` in `path`.
+    /// Checks a camera section of a file without a site over the flat
+    /// ground; errors name `camera.<field>` in `path`.
     pub fn from_spec(spec: &CameraSpec, path: &Path) -> Result<CameraSettings> {
-        let position = check_finite3(path, "camera.position", spec.position)?;
-        let look_at = check_finite3(path, "camera.look_at", spec.look_at)?;
-        let up = check_finite3(path, "camera.up", spec.up)?;
+        CameraSettings::from_spec_on(spec, None, Earth::Flat, path)
+    }
+
+    /// Checks a camera section, placing geographic points from `site` over
+    /// `earth`; errors name `camera.<field>` in `path`.
+    pub fn from_spec_on(
+        spec: &CameraSpec,
+        site: Option<&Site>,
+        earth: Earth,
+        path: &Path,
+    ) -> Result<CameraSettings> {
+        let radius = match earth {
+            Earth::Round { radius } => Some(radius),
+            Earth::Flat => None,
+        };
+        let place = |p: &Point, field: &str| {
+            p.resolve(site, radius.unwrap_or(f64::INFINITY))
+                .map_err(|e| e.within(field).in_file(path))
+        };
+        let position = place(&spec.position, "camera.position")?;
+        let position = check_finite3(path, "camera.position", position)?;
+        let look_at = match (&spec.look_at, spec.elevation, spec.azimuth) {
+            (Some(p), None, None) => {
+                let p = place(p, "camera.look_at")?;
+                check_finite3(path, "camera.look_at", p)?
+            }
+            (Some(_), _, _) => {
+                let field = if spec.elevation.is_some() {
+                    "camera.elevation"
+                } else {
+                    "camera.azimuth"
+                };
+                return Err(Error::input(
+                    path,
+                    field,
+                    "give the view once: `look_at`, or `elevation` and `azimuth`, not both",
+                ));
+            }
+            (None, Some(e), Some(a)) => {
+                if !(e.degrees > -90.0 && e.degrees < 90.0) {
+                    return Err(Error::input(
+                        path,
+                        "camera.elevation",
+                        format!(
+                            "must lie strictly between -90 and 90 degrees, got {}",
+                            e.degrees
+                        ),
+                    ));
+                }
+                let h = Horizon::at(position.to_array(), radius)
+                    .map_err(|e| e.within("camera.position").in_file(path))?;
+                // 10 km out, so that the frame's round-off (1e-9 m at
+                // 6,000 km from the site) turns the view by < 1e-13 rad.
+                position + 1e4 * DVec3::from_array(h.direction(e.degrees, a.degrees))
+            }
+            (None, Some(_), None) => {
+                return Err(Error::input(
+                    path,
+                    "camera.azimuth",
+                    "missing: an `elevation` needs an `azimuth` (degrees from north toward east)",
+                ));
+            }
+            (None, None, Some(_)) => {
+                return Err(Error::input(
+                    path,
+                    "camera.elevation",
+                    "missing: an `azimuth` needs an `elevation` (degrees above the horizontal)",
+                ));
+            }
+            (None, None, None) => {
+                return Err(Error::input(
+                    path,
+                    "camera.look_at",
+                    "missing: give `look_at` (a point), or `elevation` and `azimuth`",
+                ));
+            }
+        };
+        let up = match spec.up {
+            Some(up) => check_finite3(path, "camera.up", up)?,
+            None => vertical_at(position, earth),
+        };
         let forward = look_at - position;
         if forward.length() == 0.0 {
             return Err(Error::input(
@@ -431,7 +587,15 @@ impl Scene {
 
     /// Validates a parsed scene file (reading `medium_from` if given).
     pub fn from_file(file: SceneFile, path: &Path) -> Result<Scene> {
-        let camera = CameraSettings::from_spec(&file.camera, path)?;
+        if let Some(s) = &file.site {
+            s.validate().map_err(|e| e.within("site").in_file(path))?;
+        }
+        if let Some(spec) = &file.earth {
+            spec.validate()
+                .map_err(|e| e.within("earth").in_file(path))?;
+        }
+        let earth = earth_of(file.earth, file.site.as_ref());
+        let camera = CameraSettings::from_spec_on(&file.camera, file.site.as_ref(), earth, path)?;
         let mut inputs = Vec::new();
         let medium = match (file.medium, &file.medium_from) {
             (Some(_), Some(_)) => {
@@ -508,15 +672,32 @@ impl Scene {
                 })
             }
         };
-        let earth = match &file.earth {
-            None => Earth::Flat,
-            Some(spec) => {
-                spec.validate()
-                    .map_err(|e| e.within("earth").in_file(path))?;
-                Earth::from(Some(*spec))
-            }
+        let objects: Vec<SceneObject> = file
+            .objects
+            .iter()
+            .map(|o| SceneObject {
+                name: o.name.clone(),
+                albedo: o.albedo,
+                shape: o.shape.clone(),
+            })
+            .collect();
+        validate_objects(&objects).map_err(|e| e.within("objects").in_file(path))?;
+        let radius = match earth {
+            Earth::Round { radius } => radius,
+            Earth::Flat => f64::INFINITY,
         };
-        validate_objects(&file.objects).map_err(|e| e.within("objects").in_file(path))?;
+        let mut placed = Vec::with_capacity(objects.len());
+        for (i, (mut object, entry)) in objects.into_iter().zip(&file.objects).enumerate() {
+            if let Some(at) = &entry.at {
+                let field = format!("objects[{i}].at");
+                let p = at
+                    .resolve(file.site.as_ref(), radius)
+                    .map_err(|e| e.within(&field).in_file(path))?;
+                let p = check_finite3(path, &field, p)?;
+                object.shape = stand_at(object.shape, p, earth);
+            }
+            placed.push(object);
+        }
 
         let sun = {
             let s = &file.sun;
@@ -630,7 +811,7 @@ impl Scene {
             medium,
             ground,
             earth,
-            objects: file.objects,
+            objects: placed,
             sun,
             sky,
             glare,
