@@ -679,6 +679,13 @@ fn air_media() -> Vec<(&'static str, Medium)> {
                "humidity": 0.3, "wavelength": 633.0, "refractivity": "edlen""#,
         ),
         (
+            "ciddor, humidity table",
+            r#""temperature": {"base": 12.0, "lapse": -0.0065,
+                  "inversion": {"delta": 5.0, "height": 10.0, "thickness": 2.0}},
+               "humidity": {"table": [[0.0, 0.95], [2.0, 0.8], [12.0, 0.5], [60.0, 0.3]]},
+               "refractivity": "ciddor""#,
+        ),
+        (
             "table",
             r#""temperature": {"table": [[0.0, 35.0], [0.5, 28.0], [2.0, 24.0], [10.0, 22.0], [40.0, 21.0]]},
                "refractivity": {"gladstone_dale": 0.0787}"#,

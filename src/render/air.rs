@@ -447,12 +447,6 @@ impl Air {
         if self.straight || (self.zones.is_empty() && self.earth.is_flat()) {
             return None;
         }
-        // Not for a humidity table, which the lanes do not evaluate.
-        if let Field::Air(air) = &self.field
-            && !air.lanes_exact()
-        {
-            return None;
-        }
         PackStepper::new(&self.field, self.earth)
     }
 

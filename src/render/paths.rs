@@ -687,12 +687,7 @@ impl PathTable {
 /// within a few steps of each other, neighbours in elevation). The steps
 /// agree with the scalar ones to rounding (the polynomial exponential).
 fn trace_paths(air: &Air, origin: DVec3, thetas: &[f64], g: &PathGeometry) -> Vec<TablePath> {
-    // A humidity table has no lane form (`AirField::lanes_exact`).
-    let lanes = match air.field() {
-        crate::medium::Field::Air(f) => f.lanes_exact(),
-        _ => true,
-    };
-    let Some(stepper) = PackStepper::new(air.field(), Earth::Flat).filter(|_| lanes) else {
+    let Some(stepper) = PackStepper::new(air.field(), Earth::Flat) else {
         return thetas
             .par_iter()
             .map(|&t| trace_path(air, origin, t, g))

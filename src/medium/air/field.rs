@@ -282,16 +282,6 @@ impl<T: Real> AirField<T> {
 }
 
 impl<T: Real> AirField<T> {
-    /// Whether the lanes kernels (`trace::batch`), which call
-    /// `AirField::index_from` without the height, evaluate this air
-    /// exactly: not with a humidity table (RH changes with height) under
-    /// Ciddor's or Edlén's formula. Callers trace such air with the scalar
-    /// tracer instead.
-    pub fn lanes_exact(&self) -> bool {
-        matches!(self.humidity, Moisture::Constant(_))
-            || matches!(self.formula, Formula::GladstoneDale(_))
-    }
-
     /// The relative humidity (0…1) and its height derivative at h.
     pub fn humidity(&self, h: T) -> (T, T) {
         match &self.humidity {
@@ -326,8 +316,8 @@ impl<T: Real> AirField<T> {
     /// of [`IndexField::delta_gradient`], apart so that the lanes kernels
     /// (`trace::batch`) call it per lane where they have no vector form.
     /// It takes no height, so it serves air of one humidity only: with a
-    /// humidity table it gives NaN (see [`AirField::lanes_exact`]), never a
-    /// silently wrong value.
+    /// humidity table it gives NaN, never a silently wrong value (callers
+    /// with a height use [`AirField::index_at`]).
     #[inline]
     pub(crate) fn index_from(&self, t: T, grad_t: V3<T>, pressure: T, dp_dh: T) -> (T, V3<T>) {
         let (t, grad_t) = Self::held(t, grad_t);

@@ -7,9 +7,10 @@
 //! 2. the hot spots' excesses (3-D only), one lane loop each;
 //! 3. the pressure: constant, or the hydrostatic table per lane;
 //! 4. the temperature held inside [−150 °C, 300 °C], the formula and the
-//!    chain rule: one lane loop for Gladstone–Dale, the scalar
-//!    `AirField::index_from` per lane for Ciddor and Edlén (their partials go
-//!    through nested dual numbers, which have no lane form).
+//!    chain rule: one lane loop for Gladstone–Dale at a constant pressure,
+//!    else the scalar `AirField::index_at` per lane (Ciddor's and Edlén's
+//!    partials go through nested dual numbers, which have no lane form; a
+//!    humidity table is evaluated at the lane's height there).
 //!
 //! Where a stage runs per lane it runs the scalar code itself, so the lanes
 //! and the scalar tracer differ only by the exponential (≤ 1 ulp) and fused
@@ -122,7 +123,7 @@ impl<'a> AirLanes<'a> {
                 } else {
                     V3::new(0.0, gy[i], 0.0)
                 };
-                let (di, g) = self.field.index_from(t[i], grad_t, p, dp);
+                let (di, g) = self.field.index_at(y[i], t[i], grad_t, p, dp);
                 d[i] = di;
                 gy[i] = g.y;
                 if FULL {

@@ -130,9 +130,6 @@ pub fn trace_batch_into(field: &Field, jobs: &[RayJob], options: &BatchOptions, 
                 trace_batch_3d(isa, field, jobs, options, out);
             }
         }
-        // A humidity table the lanes do not evaluate exactly: the general
-        // tracer, as for the analytic kind (`AirField::lanes_exact`).
-        Field::Air(air) if !air.lanes_exact() => trace_scalar(field, jobs, options, out),
         Field::Air(field) => {
             if trace_air_2d(isa, field, jobs, options, out).is_err() {
                 trace_air_3d(isa, field, jobs, options, out);
