@@ -366,6 +366,49 @@ fn medium_eval<'py>(
     Ok((PyBytes::new(py, &delta), PyBytes::new(py, &gradient)))
 }
 
+/// Reads a sounding file (IGRA 2, Wyoming TEXT:LIST or CSV) into a real-air
+/// medium, as `mirage sounding` does: the medium's JSON text (what `-o`
+/// writes). `format` is `igra2`, `wyoming` or `csv` (default: inferred);
+/// `site_height` as `--site-height`.
+#[pyfunction]
+#[pyo3(signature = (path, format=None, site_height=None))]
+fn sounding(
+    py: Python<'_>,
+    path: &str,
+    format: Option<&str>,
+    site_height: Option<f64>,
+) -> PyResult<String> {
+    use crate::io::sounding::Format;
+    let format = match format {
+        None => None,
+        Some(f) => Some(
+            [Format::Igra2, Format::Wyoming, Format::Csv]
+                .into_iter()
+                .find(|k| k.name() == f)
+                .ok_or_else(|| {
+                    argument_error(
+                        py,
+                        "format",
+                        format!("must be `igra2`, `wyoming` or `csv`, got `{f}`"),
+                    )
+                })?,
+        ),
+    };
+    if let Some(h) = site_height
+        && !h.is_finite()
+    {
+        return Err(argument_error(
+            py,
+            "site_height",
+            format!("must be a finite number of metres, got {h}"),
+        ));
+    }
+    let (medium, _, _) =
+        crate::cli::sounding::medium_of(std::path::Path::new(path), format, site_height)
+            .map_err(|e| to_py(py, e))?;
+    serde_json::to_string(&medium).map_err(|e| to_py(py, Error::encode("the medium", e)))
+}
+
 /// The module: `mirage_air._native`.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -376,5 +419,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(medium_eval, m)?)?;
+    m.add_function(wrap_pyfunction!(sounding, m)?)?;
     Ok(())
 }

@@ -45,6 +45,7 @@ __all__ = [
     "trace",
     "fit",
     "render",
+    "sounding",
     "__version__",
 ]
 
@@ -358,6 +359,19 @@ def render(
     s = _scene(scene)
     w, h, data = _native.render(s._text, s.path, width, height, spp, albedo, straight, threads)
     return np.frombuffer(data, dtype="<f4").reshape(h, w, 3).copy()
+
+
+def sounding(
+    path: Union[str, "os.PathLike[str]"],
+    format: Optional[str] = None,
+    site_height: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Reads a radiosonde or mast profile into a real-air medium, as ``mirage
+    sounding`` does: the medium as a dict (``{"air": {...}}``), ready to be a
+    problem's or scene's ``"medium"``. ``format``: ``"igra2"``, ``"wyoming"``
+    or ``"csv"`` (default: from the file); ``site_height``: the observer's
+    height above the sounding's lowest level (``--site-height``)."""
+    return json.loads(_native.sounding(os.fspath(path), format, site_height))
 
 
 class Medium:

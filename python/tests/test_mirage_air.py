@@ -275,3 +275,30 @@ def test_a_scene_by_latitude_and_longitude_loads_and_renders():
     with pytest.raises(InputError) as e:
         mirage_air.load(doc)
     assert e.value.field == "site.latitude"
+
+
+@needs_cli
+@pytest.mark.parametrize("name", ["igra2-good.txt", "wyoming-good.html", "mast.csv"])
+def test_sounding_equals_the_cli(name, tmp_path):
+    path = ROOT / "tests" / "data" / "sounding" / name
+    out = tmp_path / "air.json"
+    cli("sounding", path, "-o", out)
+    assert mirage_air.sounding(path) == json.loads(out.read_text())
+    # The medium drops into a problem as it is.
+    doc = json.loads((ROOT / "problems" / "maine-surveyor.json").read_text())
+    doc["medium"] = mirage_air.sounding(path)
+    doc["free"] = []
+    assert np.isfinite(mirage_air.trace(doc).distances).all()
+
+
+def test_bad_soundings_name_the_line_or_the_argument():
+    data = ROOT / "tests" / "data" / "sounding"
+    with pytest.raises(InputError) as e:
+        mirage_air.sounding(data / "igra2-height.txt")
+    assert e.value.file.endswith("igra2-height.txt") and "line" in str(e.value)
+    with pytest.raises(InputError) as e:
+        mirage_air.sounding(data / "mast.csv", format="netcdf")
+    assert e.value.field == "format"
+    with pytest.raises(InputError) as e:
+        mirage_air.sounding(data / "mast.csv", site_height=float("nan"))
+    assert e.value.field == "site_height"
