@@ -18,6 +18,7 @@
 
 pub mod air;
 pub mod compare;
+pub mod ensemble;
 pub mod fit;
 #[cfg(feature = "preview")]
 pub mod preview;
@@ -87,6 +88,8 @@ pub enum Command {
     /// Fit the free parameters so that every pair's ray lands on its target.
     #[command(after_help = FIT_EXIT_CODES)]
     Fit(fit::FitOptions),
+    /// Fit a problem N times to resampled observations: the parameters' spread and the profiles' envelopes.
+    Ensemble(ensemble::EnsembleOptions),
     /// Measure the speed/accuracy trade of the integrators on a problem.
     Tradeoff(tradeoff::TradeoffOptions),
     /// Draw the ray diagram of a problem's pairs through its medium.
@@ -118,7 +121,9 @@ impl Command {
     /// process, which their atomic writes make safe.
     pub fn polls_interrupts(&self) -> bool {
         match self {
-            Command::Fit(_) | Command::Render(_) | Command::Tradeoff(_) => true,
+            Command::Fit(_) | Command::Ensemble(_) | Command::Render(_) | Command::Tradeoff(_) => {
+                true
+            }
             #[cfg(feature = "preview")]
             Command::Preview(o) => o.headless,
             _ => false,
@@ -174,6 +179,7 @@ impl Cli {
         match &self.command {
             Command::Trace(o) => trace::run(o).map(|_| ()),
             Command::Fit(o) => fit::run(o).map(|_| ()),
+            Command::Ensemble(o) => ensemble::run(o).map(|_| ()),
             Command::Tradeoff(o) => tradeoff::run(o).map(|_| ()),
             Command::Rays(o) => rays::run(o),
             Command::Render(o) => render::run(o),

@@ -4,6 +4,7 @@
 //! ([`solve`]), a cheaper tracer to converge under first ([`surrogate`]), and
 //! what the pairs cannot determine ([`identify`]).
 
+pub mod ensemble;
 pub mod grow;
 pub mod history;
 pub mod identify;

@@ -18,6 +18,7 @@
 mod air;
 mod axes;
 mod convergence;
+mod ensemble;
 mod figure;
 mod grow;
 mod legend;
@@ -33,6 +34,7 @@ mod tests;
 
 pub use air::draw_air;
 pub use convergence::draw_convergence;
+pub use ensemble::draw_ensemble;
 pub use figure::ImageFormat;
 pub use grow::draw_grow;
 pub use rays::draw_rays;
