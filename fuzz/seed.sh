@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 root=..
 c=corpus
-mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured" "$c/sounding"
+mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured" "$c/sounding" "$c/geo"
 
 # Problem files, as they are.
 for f in "$root"/problems/*.json "$root"/problems/atmospheres/*.json "$root"/problems/grow/*.json; do
@@ -59,5 +59,50 @@ for f in "$root"/tests/data/sounding/*; do
     for n in 0 1 2 3; do
         { printf "\\$((n))"; printf '\0'; cat "$f"; } >"$c/sounding/$n-$(basename "$f")"
     done
+done
+# Places and angles: a mode byte, then the input. 0: angle strings (the
+# docs' examples and the elevations of the problems); 1: fixed byte strings
+# for `arbitrary`; 2: problem files with a `site`, and variations of them
+# (geographic origins and `through`, azimuths, an `earth`).
+i=0
+for a in "-0°02'47\"" "212°30′00″" "12d30m5.5s" "-0 2 47" "45°" "  7.25 " "30'" "+1°30'" \
+    "−1°2′3.5″" "-0°05′09″" "-0.5" "90" "1°60'" "1.5°30'" "0°00′00.01″" "359º59’59.99s"; do
+    { printf '\0'; printf '%s' "$a"; } >"$c/geo/angle-$i"
+    i=$((i + 1))
+done
+for n in 0 1 2 3; do
+    { printf '\001'; head -c 256 /dev/zero | tr '\0' "\\$((n + 2))"; } >"$c/geo/fill-$n"
+done
+for f in $(grep -l '"site"' "$root"/problems/*.json); do
+    { printf '\002'; cat "$f"; } >"$c/geo/$(basename "$f")"
+    python3 - "$f" "$c/geo/var-$(basename "$f" .json)" <<'PY'
+import json, sys
+p = json.load(open(sys.argv[1]))
+site = p["site"]
+pairs = p["pairs"]
+variants = []
+# The origin at the site as a geographic point, the azimuth written out.
+q = json.loads(json.dumps(p))
+for pr in q["pairs"]:
+    pr["origin"] = {"latitude": site["latitude"], "longitude": site["longitude"], "height": site["height"]}
+    pr["azimuth"] = "212°30'00\""
+variants.append(q)
+# `through` a geographic point instead of an elevation; an earth of its own.
+q = json.loads(json.dumps(p))
+for pr in q["pairs"]:
+    pr.pop("elevation", None)
+    pr.pop("azimuth", None)
+    pr["through"] = dict(pr["target"]) if isinstance(pr["target"], dict) else pr["target"]
+q["earth"] = {"radius": 6371000.0}
+variants.append(q)
+# Across the antimeridian, near a pole.
+q = json.loads(json.dumps(p))
+q["site"] = {"latitude": 89.9, "longitude": 179.999, "height": 0}
+variants.append(q)
+for k, v in enumerate(variants):
+    with open(f"{sys.argv[2]}-{k}", "w") as out:
+        out.write("\x02")
+        out.write(json.dumps(v))
+PY
 done
 echo "seeded: $(find "$c" -type f | wc -l) files in $c/"

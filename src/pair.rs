@@ -149,9 +149,24 @@ impl PairEntry {
                     Some(a) => a.degrees,
                     None => h.azimuth(to),
                 };
-                let range = to.iter().map(|v| v * v).sum::<f64>().sqrt().max(1.0);
+                // The square root of the sum of squares overflowed to ∞ beyond
+                // 10¹⁵⁴ m and put `through` at ±∞ (found by fuzzing).
+                let range = distance(V3::from(to));
+                if range > RANGE_LIMITS.1 {
+                    return Err(range_error("target", range));
+                }
+                let range = range.max(1.0);
                 let d = h.direction(e.degrees, azimuth);
-                std::array::from_fn(|k| origin[k] + range * d[k])
+                let through: [f64; 3] = std::array::from_fn(|k| origin[k] + range * d[k]);
+                if through.iter().any(|c| !c.is_finite()) {
+                    return Err(FieldError::new(
+                        "origin",
+                        format!(
+                            "coordinates {origin:?} are too large to put a line of sight through them"
+                        ),
+                    ));
+                }
+                through
             }
         };
         Ok(PointPair {
@@ -172,6 +187,27 @@ impl PairEntry {
     }
 }
 
+/// The distances a target and a `through` point may lie from their origin
+/// (m): both are squared (norms, the launch direction, the angle residual's
+/// weight w/|target − origin|), and a distance of 10⁻³⁰⁴ m squared to 0 and
+/// made that weight ∞ (found by fuzzing).
+pub const RANGE_LIMITS: (f64, f64) = (1.0e-150, 1.0e150);
+
+/// |`v`|, without overflow or underflow in the squares.
+fn distance(v: V3) -> f64 {
+    v.x.hypot(v.y).hypot(v.z)
+}
+
+/// A `field` (`target`, `through`) `range` metres from its origin, outside
+/// [`RANGE_LIMITS`].
+fn range_error(field: &str, range: f64) -> FieldError {
+    let (lo, hi) = RANGE_LIMITS;
+    FieldError::new(
+        field,
+        format!("lies {range:e} m from `origin`; it must lie {lo:e} to {hi:e} m away"),
+    )
+}
+
 impl From<PointPair> for PairEntry {
     fn from(p: PointPair) -> Self {
         PairEntry {
@@ -189,7 +225,8 @@ impl From<PointPair> for PairEntry {
 
 impl PointPair {
     /// Checks the pair's geometry: finite coordinates, `through` ≠ `origin`, the
-    /// target not straight above or below the origin, a non-negative weight,
+    /// target not straight above or below the origin, both [`RANGE_LIMITS`]
+    /// away from it, a non-negative weight,
     /// a wavelength (if any) in [`WAVELENGTH_RANGE`]. Whether the medium has
     /// a wavelength at all is the problem's check.
     pub fn validate(&self) -> Result<(), FieldError> {
@@ -229,12 +266,22 @@ impl PointPair {
                 "equals `origin`, so there is no direction to look in".to_string(),
             ));
         }
+        // Beyond 10¹⁵⁴ m the direction's norm overflowed and it became 0;
+        // below 10⁻¹⁵⁴ m it underflowed and the direction was not a unit.
+        let reach = distance(V3::from(self.through) - o);
+        if !(RANGE_LIMITS.0..=RANGE_LIMITS.1).contains(&reach) {
+            return Err(range_error("through", reach));
+        }
         let d = V3::from(self.target) - o;
         if d.x.hypot(d.z) == 0.0 {
             return Err(FieldError::new(
                 "target",
                 "is straight above or below `origin`: the target plane (facing the observer) is undefined".to_string(),
             ));
+        }
+        let range = distance(d);
+        if !(RANGE_LIMITS.0..=RANGE_LIMITS.1).contains(&range) {
+            return Err(range_error("target", range));
         }
         Ok(())
     }

@@ -15,10 +15,13 @@
 //! `python3` that imports `geographiclib`; else the test is skipped loudly,
 //! or fails under `MIRAGE_REQUIRE_MITSUBA=1` (as `.ci/run` sets).
 
-use mirage::geo::{GeoPoint, Site};
+use mirage::geo::{Angle, GeoPoint, Horizon, Point, Site, format_dms};
 use mirage::math::SplitMix64;
+use mirage::pair::PairEntry;
+use mirage::problem::Problem;
+use mirage::trace::Earth;
 use std::io::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 /// A Python that imports `geographiclib`.
@@ -153,4 +156,161 @@ fn geographic_points_keep_geographiclib_s_distance_and_azimuth() {
         cases.len()
     );
     assert!(crossed > 100, "{crossed} cases cross the antimeridian");
+}
+
+// Crashes the `geo` fuzz target found (`fuzz/fuzz_targets/geo.rs`), each
+// with the input it found (shortened where the rest did not matter).
+
+/// `geo`, in its first second: a geographic point placed over the flat
+/// ground (`PairEntry::resolve` with `Earth::Flat`, radius ∞) was [NaN, NaN,
+/// NaN]: (R + h)·sin(s/R) is ∞·0 and (R + h)·cos(s/R) − R is ∞ − ∞. Now the
+/// sphere's limit: the geodesic's distance along its azimuth on the plane.
+#[test]
+fn fuzz_regression_geo_point_over_the_flat_ground_is_finite() {
+    let site = Site {
+        latitude: 0.0,
+        longitude: 0.0,
+        height: 0.0,
+    };
+    // The input found: the site itself.
+    let here = GeoPoint {
+        latitude: 0.0,
+        longitude: 0.0,
+        height: 0.0,
+    };
+    assert_eq!(site.place(&here, f64::INFINITY), [0.0, 0.0, 0.0]);
+    let p = GeoPoint {
+        latitude: 0.01,
+        longitude: 0.02,
+        height: 30.0,
+    };
+    let (s, azimuth) = site.geodesic_to(&p);
+    let x = Point::Geo(p).resolve(Some(&site), f64::INFINITY).unwrap();
+    assert_eq!(x[1], 30.0);
+    assert!((x[0].hypot(x[2]) - s).abs() < 1e-9, "{x:?} vs {s} m");
+    assert!((x[0].atan2(x[2]).to_degrees() - azimuth).abs() < 1e-12);
+    // The limit of ever larger spheres.
+    let far = site.place(&p, 1e12);
+    for k in 0..3 {
+        assert!((far[k] - x[k]).abs() < 1e-3, "{far:?} vs {x:?}");
+    }
+    // A whole pair, aimed by elevation, over the flat ground.
+    let pair: PairEntry = serde_json::from_str(
+        r#"{"origin": {"latitude": 0, "longitude": 0, "height": 1.5},
+            "elevation": "-0°02'47\"", "target": {"latitude": 0.01, "longitude": 0.02}}"#,
+    )
+    .unwrap();
+    let r = pair.resolve(Some(&site), Earth::Flat).unwrap();
+    let all = r.origin.iter().chain(&r.through).chain(&r.target);
+    assert!(all.into_iter().all(|c| c.is_finite()), "{r:?}");
+}
+
+/// `geo`, on the JSON angle `1e303` (a valid angle): `format_dms` printed
+/// `inf°NaN′00NaN″`, which does not read back, as |degrees|·360000
+/// overflowed above 5·10³⁰² degrees. Every finite angle now reads back to
+/// 0.005″ and the f64 rounding of d + m/60 + s/3600.
+#[test]
+fn fuzz_regression_geo_format_dms_reads_back_any_finite_angle() {
+    let a: Angle = serde_json::from_str("1e303").unwrap();
+    for d in [
+        a.degrees,
+        -a.degrees,
+        f64::MAX,
+        4e15,
+        1e10,
+        -123_456_789.123_456,
+    ] {
+        let shown = format_dms(d);
+        let back: Angle = shown
+            .parse()
+            .unwrap_or_else(|e| panic!("{d} printed as {shown}: {e}"));
+        assert!(
+            (back.degrees - d).abs() <= 0.005 / 3600.0 + f64::EPSILON * d.abs(),
+            "{d} printed as {shown}, read back as {}",
+            back.degrees
+        );
+    }
+    assert_eq!(format_dms(1e10), "10000000000°00′00.00″");
+}
+
+/// `geo`: a pair aimed by `elevation` at a target 2.4·10²⁸⁵ m away got
+/// `through` = [inf, NaN, -inf] (the distance was the square root of a sum of
+/// squares, ∞ beyond 10¹⁵⁴ m), and a problem refused it as
+/// `pairs[0].through: coordinates must be finite`, a field the file does not
+/// have. Now the target is refused by name, for `through` pairs too.
+#[test]
+fn fuzz_regression_geo_elevation_toward_a_target_beyond_1e154_m_names_the_target() {
+    let pair: PairEntry = serde_json::from_str(
+        r#"{"origin": [100000, -11000, 100000], "elevation": 0,
+            "target": [100000, 2.4374274493454076e285, 1.5]}"#,
+    )
+    .unwrap();
+    for earth in [Earth::Flat, Earth::Round { radius: 6.371e6 }] {
+        let e = pair.resolve(None, earth).unwrap_err();
+        assert_eq!(e.path, "target", "{e}");
+        assert!(e.message.contains("2.4374274493454076e285 m"), "{e}");
+    }
+    let problem = |sight: &str| {
+        format!(
+            r#"{{"medium": {{"scale": 1.0}}, "pairs": [{{"origin": [0, 1.5, 0], {sight},
+                "target": [1e200, 0, 0]}}]}}"#
+        )
+    };
+    for sight in [r#""elevation": 0"#, r#""through": [1, 1.5, 0]"#] {
+        let e = Problem::parse(&problem(sight), Path::new("fuzz.json")).unwrap_err();
+        let field = e.field().unwrap();
+        assert_eq!(field.path, "pairs[0].target", "{e}");
+        assert_eq!(e.exit_code(), 2);
+    }
+    // The same overflow in |through − origin| (found reading the code) made
+    // the launch direction the zero vector: `through` is refused by name.
+    let text = r#"{"medium": {"scale": 1.0}, "pairs": [{"origin": [0, 1.5, 0],
+        "through": [1e200, 1.5, 0], "target": [900, 1.5, 0]}]}"#;
+    let e = Problem::parse(text, Path::new("fuzz.json")).unwrap_err();
+    assert_eq!(e.field().unwrap().path, "pairs[0].through", "{e}");
+}
+
+/// `geo`: with `"residual": "angle"` each weight is divided by |target −
+/// origin|, and a target 5.4·10⁻³¹² m from its origin (beside it, so not
+/// straight above) squared that distance to 0 and loaded with weight ∞.
+/// Now a target must lie 10⁻¹⁵⁰ to 10¹⁵⁰ m away, refused by name.
+#[test]
+fn fuzz_regression_geo_target_5e_312_m_away_is_refused() {
+    let text = r#"{"medium": {"scale": 1.0}, "residual": "angle",
+        "pairs": [{"origin": [-10998.30630025787, 0, 5.420658057725e-312],
+                   "through": [0, 0, 0], "target": [-10998.30630025787, 0, 0]}]}"#;
+    let e = Problem::parse(text, Path::new("fuzz.json")).unwrap_err();
+    let field = e.field().unwrap();
+    assert_eq!(field.path, "pairs[0].target", "{e}");
+    assert!(field.message.contains("5.420658057725e-312 m"), "{e}");
+}
+
+/// `geo`: a `through` point 8.9·10⁻¹⁵⁹ m from its origin: the launch
+/// direction's squared norm was subnormal, and the direction came out
+/// 1.000000008 long (below 10⁻¹⁶² m it is 0 and `through` equals `origin`).
+/// Now `through` too must lie 10⁻¹⁵⁰ to 10¹⁵⁰ m away, refused by name.
+#[test]
+fn fuzz_regression_geo_through_9e_159_m_away_is_refused() {
+    let text = r#"{"medium": {"scale": 1.0}, "pairs": [{"origin": [0, 0, 8.854359478573806e-159],
+        "through": [0, 0, 0], "target": [-8823.529411764706, -8823.529411764706, -8823.529411764706]}]}"#;
+    let e = Problem::parse(text, Path::new("fuzz.json")).unwrap_err();
+    let field = e.field().unwrap();
+    assert_eq!(field.path, "pairs[0].through", "{e}");
+    assert!(field.message.contains("8.854359478573806e-159 m"), "{e}");
+}
+
+/// Beside the crash of a target beyond 10¹⁵⁴ m (found reading the code, and
+/// checked by the target since): the horizon at a point that far out (a
+/// pair's origin, where `elevation` is measured) had up = east = 0, the
+/// squares of its norm overflowing, so the elevation was silently dropped.
+#[test]
+fn fuzz_regression_geo_horizon_far_out_is_orthonormal() {
+    let h = Horizon::at([1e200, 0.0, 0.0], Some(6.371e6)).unwrap();
+    for (got, want) in [
+        (h.up, [1.0, 0.0, 0.0]),
+        (h.north, [0.0, 0.0, 1.0]),
+        (h.east, [0.0, -1.0, 0.0]),
+    ] {
+        assert!((0..3).all(|k| (got[k] - want[k]).abs() < 1e-15), "{h:?}");
+    }
 }

@@ -3,7 +3,8 @@
 //!
 //! Parsing is exact to the f64 of d + m/60 + s/3600 (one rounding per
 //! operation); [`format_dms`] writes seconds to 0.01″ and round-trips any
-//! angle to 0.005″.
+//! finite angle to 0.005″ (and the rounding of d + m/60 + s/3600 to an f64,
+//! which is more only beyond 10⁹ degrees).
 
 use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
@@ -145,11 +146,17 @@ pub fn format_dms(degrees: f64) -> String {
         return format!("{degrees}");
     }
     let sign = if degrees < 0.0 { "-" } else { "" };
-    let hundredths = (degrees.abs() * 360_000.0).round();
-    let d = (hundredths / 360_000.0).floor();
-    let rest = hundredths - d * 360_000.0;
-    let m = (rest / 6_000.0).floor();
-    let s = (rest - m * 6_000.0) / 100.0;
+    // Whole degrees and the fraction apart (both exact): |degrees|·360000
+    // overflowed to ∞ above 5·10³⁰² degrees and printed `inf°NaN′00NaN″`,
+    // which does not read back (found by fuzzing).
+    let mut d = degrees.abs().trunc();
+    let mut hundredths = ((degrees.abs() - d) * 360_000.0).round();
+    if hundredths >= 360_000.0 {
+        d += 1.0;
+        hundredths = 0.0;
+    }
+    let m = (hundredths / 6_000.0).floor();
+    let s = (hundredths - m * 6_000.0) / 100.0;
     format!("{sign}{d:.0}°{m:02.0}′{s:05.2}″")
 }
 

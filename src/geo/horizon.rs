@@ -23,6 +23,12 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 fn unit(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
+    // Beyond 10¹⁵⁴ m the squares overflow: n = ∞ made `up` the zero vector.
+    let n = if n.is_finite() {
+        n
+    } else {
+        a[0].hypot(a[1]).hypot(a[2])
+    };
     [a[0] / n, a[1] / n, a[2] / n]
 }
 

@@ -135,10 +135,17 @@ impl Site {
     /// `p` in the site's frame over the sphere of `radius` (m) centred at
     /// (0, −radius, 0): at arc [`Site::geodesic_to`]'s distance from the
     /// site's foot along its azimuth, raised `p.height` along the normal.
+    /// An infinite `radius` is the flat ground y = 0, the sphere's limit:
+    /// at that distance along that azimuth on the plane, raised `p.height`.
     pub fn place(&self, p: &GeoPoint, radius: f64) -> [f64; 3] {
         let (s, azimuth) = self.geodesic_to(p);
-        let theta = s / radius;
         let (sa, ca) = azimuth.to_radians().sin_cos();
+        if radius == f64::INFINITY {
+            // (R + h)·sin(s/R) and (R + h)·cos(s/R) − R as R → ∞; the
+            // sphere's formulas give ∞·0 and ∞ − ∞ = NaN (found by fuzzing).
+            return [s * sa, p.height, s * ca];
+        }
+        let theta = s / radius;
         let (st, ct) = theta.sin_cos();
         let r = radius + p.height;
         [r * st * sa, r * ct - radius, r * st * ca]
@@ -152,7 +159,8 @@ impl Site {
 
 impl Point {
     /// The point in the local frame: `[x, y, z]` as given, or a geographic
-    /// point placed from `site` over the sphere of `radius`.
+    /// point placed from `site` over the sphere of `radius` (infinite: the
+    /// flat ground, as [`Site::place`]).
     pub fn resolve(&self, site: Option<&Site>, radius: f64) -> Result<[f64; 3], FieldError> {
         match self {
             Point::Local(v) => Ok(*v),
