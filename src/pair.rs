@@ -97,10 +97,7 @@ impl PairEntry {
     /// or from `elevation` and `azimuth` at the origin's horizon (`through`
     /// is then put on that line at the target's distance).
     pub fn resolve(&self, site: Option<&Site>, earth: Earth) -> Result<PointPair, FieldError> {
-        let radius = match earth {
-            Earth::Round { radius } => Some(radius),
-            Earth::Flat => None,
-        };
+        let radius = earth.radius();
         let place = |p: &Point, name: &str| {
             p.resolve(site, radius.unwrap_or(f64::INFINITY))
                 .map_err(|e| e.within(name))

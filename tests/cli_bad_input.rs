@@ -687,6 +687,26 @@ fn a_round_earth_that_is_not_one() {
     rejects(&below, &["pairs[0].origin", "below the ground", "sphere"]);
 }
 
+/// Renders the scene `text` (written to a temporary `scene.json`) to a PNG:
+/// the exit code, stderr, the scene's path, and whether an image was
+/// written.
+fn render(text: &str) -> (Option<i32>, String, std::path::PathBuf, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scene.json");
+    std::fs::write(&input, text).unwrap();
+    let output = dir.path().join("out.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
+        .arg("render")
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+    (run.status.code(), stderr, input, output.exists())
+}
+
 #[test]
 fn a_scene_over_a_round_earth_that_is_not_one() {
     let scene = |earth: &str| {
@@ -696,22 +716,6 @@ fn a_scene_over_a_round_earth_that_is_not_one() {
                  "ground": {{ "albedo": [0.2, 0.3, 0.4] }},
                  "earth": {earth} }}"#
         )
-    };
-    let render = |text: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let input = dir.path().join("scene.json");
-        std::fs::write(&input, text).unwrap();
-        let output = dir.path().join("out.png");
-        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
-            .arg("render")
-            .arg(&input)
-            .arg("-o")
-            .arg(&output)
-            .arg("--quiet")
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
-        (run.status.code(), stderr, input, output.exists())
     };
     // The good scene over the earth renders.
     let (code, stderr, _, written) = render(&scene(r#"{"radius": 6371000.0}"#));
@@ -1062,22 +1066,6 @@ fn geo_scene(site: &str, camera: &str, objects: &str) -> String {
 
 #[test]
 fn geographic_scene_fields_are_checked_by_name() {
-    let render = |text: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let input = dir.path().join("scene.json");
-        std::fs::write(&input, text).unwrap();
-        let output = dir.path().join("out.png");
-        let run = Command::new(env!("CARGO_BIN_EXE_mirage"))
-            .arg("render")
-            .arg(&input)
-            .arg("-o")
-            .arg(&output)
-            .arg("--quiet")
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
-        (run.status.code(), stderr, input, output.exists())
-    };
     const SITE: &str = r#""site": { "latitude": 43.28, "longitude": 5.37, "height": 160 },"#;
     const CAMERA: &str = r#""position": [0, 164, 0], "elevation": "-0°10'", "azimuth": 250"#;
     const HILL: &str = r#"{ "albedo": [0.5, 0.5, 0.5], "at": { "latitude": 43.25, "longitude": 5.1 },

@@ -455,10 +455,7 @@ impl CameraSettings {
         earth: Earth,
         path: &Path,
     ) -> Result<CameraSettings> {
-        let radius = match earth {
-            Earth::Round { radius } => Some(radius),
-            Earth::Flat => None,
-        };
+        let radius = earth.radius();
         let place = |p: &Point, field: &str| {
             p.resolve(site, radius.unwrap_or(f64::INFINITY))
                 .map_err(|e| e.within(field).in_file(path))
@@ -682,10 +679,7 @@ impl Scene {
             })
             .collect();
         validate_objects(&objects).map_err(|e| e.within("objects").in_file(path))?;
-        let radius = match earth {
-            Earth::Round { radius } => radius,
-            Earth::Flat => f64::INFINITY,
-        };
+        let radius = earth.radius().unwrap_or(f64::INFINITY);
         let mut placed = Vec::with_capacity(objects.len());
         for (i, (mut object, entry)) in objects.into_iter().zip(&file.objects).enumerate() {
             if let Some(at) = &entry.at {

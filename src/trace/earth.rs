@@ -102,6 +102,14 @@ impl Earth {
         }
     }
 
+    /// The sphere's radius (m); `None` for the flat ground.
+    pub fn radius(self) -> Option<f64> {
+        match self {
+            Earth::Round { radius } => Some(radius),
+            Earth::Flat => None,
+        }
+    }
+
     /// Whether the ground is the plane y = 0.
     pub fn is_flat(self) -> bool {
         matches!(self, Earth::Flat)
