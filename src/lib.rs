@@ -16,6 +16,7 @@ pub mod io;
 pub mod math;
 pub mod medium;
 pub mod pair;
+pub mod photo;
 pub mod plot;
 #[cfg(feature = "preview")]
 pub mod preview;

@@ -1,0 +1,2 @@
+//! From a photograph to the air: reading the photo and its EXIF focal length.
+pub mod picture;
