@@ -8,6 +8,8 @@
 //! - [`draw_convergence`]: how a fit's objective and parameters moved.
 //! - [`draw_grow`]: the same for a grown fit, beside the criterion per step.
 //! - [`draw_tradeoff`]: the speed/accuracy trade of the integrators.
+//! - [`draw_overlay`]: a photo with its marks, where the air puts them and the
+//!   apparent horizon.
 //!
 //! Text is drawn with an embedded DejaVu Sans ([`ensure_font`]), so plotting
 //! needs no system font library; raster text is placed glyph by glyph (see
@@ -23,6 +25,8 @@ mod figure;
 mod grow;
 mod legend;
 mod marker;
+mod overlay;
+mod raster;
 mod rays;
 mod refraction;
 mod style;
@@ -37,6 +41,7 @@ pub use convergence::draw_convergence;
 pub use ensemble::draw_ensemble;
 pub use figure::ImageFormat;
 pub use grow::draw_grow;
+pub use overlay::{Overlay, OverlayMark, draw_overlay};
 pub use rays::draw_rays;
 pub use refraction::draw_refraction;
 pub use style::ensure_font;
