@@ -67,6 +67,13 @@ struct MediumOnly {
 /// Runs the ensemble, writes its outputs, prints the summary.
 pub fn run(o: &EnsembleOptions) -> Result<EnsembleReport> {
     let problem = Problem::load(&o.problem)?;
+    if problem.photo.is_some() {
+        return Err(crate::error::Error::input(
+            &o.problem,
+            "photo",
+            "an ensemble of a photo problem (marks resampled in pixels) is not built yet",
+        ));
+    }
     if problem.free.is_empty() {
         return Err(crate::error::Error::input(
             &o.problem,

@@ -33,6 +33,10 @@ pub struct FitOptions {
     /// Ray diagram of the fitted medium (.png or .svg).
     #[arg(long)]
     pub rays: Option<PathBuf>,
+    /// A photo problem's marks drawn on its photo where the fitted air and
+    /// camera put them (.png).
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
     /// Solver (overrides the problem file).
     #[arg(long, value_enum)]
     pub method: Option<SolverMethod>,
@@ -89,6 +93,12 @@ pub(crate) fn apply_flags(options: &FitOptions, problem: &mut Problem) -> Result
         solver.target_enforced = true;
     }
     let grows = options.grow || solver.grow.is_some();
+    if grows && problem.photo.is_some() {
+        return Err(Error::usage(
+            "--grow",
+            "growing a model from a photo's marks is not built yet: fit the terms the problem names",
+        ));
+    }
     for (flag, set) in [
         ("--noise", options.noise.is_some()),
         ("--max-terms", options.max_terms.is_some()),
@@ -150,11 +160,22 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
     let problem_path = options.problem.as_path();
     let mut problem = Problem::load(problem_path)?;
     apply_flags(options, &mut problem)?;
+    if options.overlay.is_some() && problem.photo.is_none() {
+        return Err(Error::usage(
+            "--overlay",
+            "draws a photo problem's marks on its photo; this problem has no `photo` section",
+        ));
+    }
     check_outputs(
         [
             Output::optional("-o", options.output.as_ref(), OutputKind::Any),
             Output::optional("--plot", options.plot.as_ref(), OutputKind::Plot),
             Output::optional("--rays", options.rays.as_ref(), OutputKind::Plot),
+            Output::optional(
+                "--overlay",
+                options.overlay.as_ref(),
+                OutputKind::Png("an overlay"),
+            ),
         ]
         .into_iter()
         .flatten(),
@@ -195,6 +216,9 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
     }
     if let Some(rays) = &options.rays {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;
+    }
+    if let (Some(path), Some(photo)) = (&options.overlay, &report.photo) {
+        super::overlay::write_overlay(&problem, photo, &format!("{}: fitted", problem.name), path)?;
     }
     print!("{}", fit_summary(&problem, &report));
     let sv = &report.solver;
@@ -320,7 +344,11 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
     if !flagged.is_empty() {
         let _ = writeln!(s, "flags: {}", flagged.join(", "));
     }
-    s.push_str(&super::sightline::sightline_table(&r.pairs));
+    if let Some(photo) = &r.photo {
+        s.push_str(&super::overlay::photo_summary(photo));
+    } else {
+        s.push_str(&super::sightline::sightline_table(&r.pairs));
+    }
     if let Some(g) = &r.grow {
         s.push_str(&grow_summary(g));
     }

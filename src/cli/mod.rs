@@ -20,6 +20,7 @@ pub mod air;
 pub mod compare;
 pub mod ensemble;
 pub mod fit;
+pub mod overlay;
 #[cfg(feature = "preview")]
 pub mod preview;
 pub mod rays;
@@ -90,6 +91,8 @@ pub enum Command {
     Fit(fit::FitOptions),
     /// Fit a problem N times to resampled observations: the parameters' spread and the profiles' envelopes.
     Ensemble(ensemble::EnsembleOptions),
+    /// Draw a photo problem's marks on its photo where its starting air and camera put them.
+    Overlay(overlay::OverlayOptions),
     /// Measure the speed/accuracy trade of the integrators on a problem.
     Tradeoff(tradeoff::TradeoffOptions),
     /// Draw the ray diagram of a problem's pairs through its medium.
@@ -180,6 +183,7 @@ impl Cli {
             Command::Trace(o) => trace::run(o).map(|_| ()),
             Command::Fit(o) => fit::run(o).map(|_| ()),
             Command::Ensemble(o) => ensemble::run(o).map(|_| ()),
+            Command::Overlay(o) => overlay::run(o).map(|_| ()),
             Command::Tradeoff(o) => tradeoff::run(o).map(|_| ()),
             Command::Rays(o) => rays::run(o),
             Command::Render(o) => render::run(o),

@@ -8,6 +8,9 @@ use std::fmt::Write as _;
 
 /// F's unit and what a residual is, for the summaries.
 pub(crate) fn objective_unit(problem: &Problem) -> &'static str {
+    if problem.photo.is_some() {
+        return "px² (photo marks: ½ Σ residual²)";
+    }
     match problem.residual {
         Residual::Distance => "m²",
         Residual::Angle => "rad² (angle residuals: miss / range)",
@@ -17,6 +20,9 @@ pub(crate) fn objective_unit(problem: &Problem) -> &'static str {
 /// What `summed distance` and `largest` sum, for the summaries: metres,
 /// or with angle residuals the weighted misses in radians.
 pub(crate) fn summed_unit(problem: &Problem) -> &'static str {
+    if problem.photo.is_some() {
+        return "px (Σ over target marks)";
+    }
     match problem.residual {
         Residual::Distance => "m",
         Residual::Angle => "rad (Σ miss/range)",

@@ -11,7 +11,7 @@
 //! residual, flagged as unscaled).
 
 use crate::medium::Param;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// Singular values below this fraction of the largest are treated as zero.
@@ -57,6 +57,25 @@ pub struct Identifiability {
 
 /// Analyses the Jacobian `jac` (3m × n) at the solution `x` with objective `f`.
 pub fn analyse(jac: &DMatrix<f64>, x: &[f64], free: &[Param], f: f64) -> Identifiability {
+    let names: Vec<String> = free.iter().map(|p| p.to_string()).collect();
+    let amplitude: Vec<bool> = free.iter().map(|p| p.is_amplitude()).collect();
+    analyse_named(jac, x, &names, &amplitude, f, None)
+}
+
+/// [`analyse`] with the parameters by name, and whether each is an
+/// amplitude of the logistic model (the gauge): for x holding more than the
+/// medium's parameters (a photo's camera, `crate::fit::objective`). With
+/// `known` (the residuals' noise variance σ², as a photo problem's `noise`
+/// gives it) the standard errors use it instead of the residual variance
+/// 2F/(m − rank).
+pub fn analyse_named(
+    jac: &DMatrix<f64>,
+    x: &[f64],
+    names: &[String],
+    amplitude: &[bool],
+    f: f64,
+    known: Option<f64>,
+) -> Identifiability {
     let (m, n) = jac.shape();
     if n == 0 {
         return Identifiability {
@@ -135,23 +154,28 @@ pub fn analyse(jac: &DMatrix<f64>, x: &[f64], free: &[Param], f: f64) -> Identif
             }
             k
         };
-        let note = explain(&keep, x, free);
+        let note = explain(&keep, x, names, amplitude);
         undetermined.push(NullDirection {
-            combination: keep
-                .iter()
-                .map(|(k, w)| (free[*k].to_string(), *w))
-                .collect(),
+            combination: keep.iter().map(|(k, w)| (names[*k].clone(), *w)).collect(),
             relative_singular_value: if smax > 0.0 { sigma[i] / smax } else { 0.0 },
             note,
         });
     }
 
+    if !undetermined
+        .iter()
+        .any(|u| u.combination.iter().any(|(n, _)| n == "camera.tilt"))
+        && let Some(d) = tilt_degeneracy(jac, &norms, names)
+    {
+        undetermined.push(d);
+    }
+
     let dof = m as i64 - rank as i64;
-    let scaled_by_variance = dof > 0;
-    let variance = if scaled_by_variance {
-        2.0 * f / dof as f64
-    } else {
-        1.0
+    let scaled_by_variance = dof > 0 && known.is_none();
+    let variance = match known {
+        Some(v) => v,
+        None if scaled_by_variance => 2.0 * f / dof as f64,
+        None => 1.0,
     };
     let params = (0..n)
         .map(|k| {
@@ -180,24 +204,74 @@ pub fn analyse(jac: &DMatrix<f64>, x: &[f64], free: &[Param], f: f64) -> Identif
     }
 }
 
+/// How close the camera's tilt column may come to the span of the air's
+/// columns (the sine of the angle between them, columns scaled to unit
+/// length) before the pair is reported: at 0.05 the tilt's standard error
+/// is 20 times what it would be with the air known.
+pub const TILT_DEGENERACY: f64 = 0.05;
+
+/// The tilt–refraction degeneracy of a photo fit, when the marks cannot
+/// separate a tilt of the camera from a change of the air (every mark at
+/// one distance, no horizon mark): the tilt column lies within
+/// [`TILT_DEGENERACY`] of the span of the air's columns, though not
+/// exactly in it (which the rank test above would catch).
+fn tilt_degeneracy(jac: &DMatrix<f64>, norms: &[f64], names: &[String]) -> Option<NullDirection> {
+    let t = names.iter().position(|n| n == "camera.tilt")?;
+    let air: Vec<usize> = (0..names.len())
+        .filter(|k| !names[*k].starts_with("camera.") && norms[*k] > 0.0 && norms[*k].is_finite())
+        .collect();
+    if air.is_empty() || !(norms[t] > 0.0 && norms[t].is_finite()) {
+        return None;
+    }
+    let m = jac.nrows();
+    let a = DMatrix::from_fn(m, air.len(), |i, c| jac[(i, air[c])] / norms[air[c]]);
+    let tcol = DVector::from_fn(m, |i, _| jac[(i, t)] / norms[t]);
+    let c = a.clone().svd(true, true).solve(&tcol, 1e-12).ok()?;
+    let sine = (&tcol - &a * &c).norm();
+    if sine.is_nan() || sine >= TILT_DEGENERACY {
+        return None;
+    }
+    // Δtilt·t = Σ c_k·(air column k), in parameter units.
+    let mut combination = vec![("camera.tilt".to_string(), 1.0 / norms[t])];
+    for (j, &k) in air.iter().enumerate() {
+        combination.push((names[k].clone(), -c[j] / norms[k]));
+    }
+    let len = combination.iter().map(|(_, w)| w * w).sum::<f64>().sqrt();
+    for e in &mut combination {
+        e.1 /= len;
+    }
+    let air_names: Vec<&str> = air.iter().map(|k| names[*k].as_str()).collect();
+    Some(NullDirection {
+        combination,
+        relative_singular_value: sine,
+        note: format!(
+            "tilt–refraction degeneracy: the marks cannot tell a tilt of the camera from a change of the air ({}) — the tilt's column lies within {:.2e} (sine of the angle) of the air's; add a horizon mark or marks at other distances, or fix `camera.tilt`",
+            air_names.join(", "),
+            sine
+        ),
+    })
+}
+
 /// Words for a null direction; recognises the model's gauge freedom (all
 /// amplitudes scaled together).
-fn explain(combination: &[(usize, f64)], x: &[f64], free: &[Param]) -> String {
-    let names: Vec<String> = combination
-        .iter()
-        .map(|(k, _)| free[*k].to_string())
-        .collect();
+fn explain(combination: &[(usize, f64)], x: &[f64], all: &[String], amplitude: &[bool]) -> String {
+    let names: Vec<String> = combination.iter().map(|(k, _)| all[*k].clone()).collect();
     if combination.len() == 1 {
         return format!(
             "no pair's endpoint depends on `{}`: fix it (remove it from `free`) or add pairs whose rays it bends",
             names[0]
         );
     }
-    let amplitudes: Vec<usize> = (0..free.len())
-        .filter(|k| free[*k].is_amplitude())
-        .collect();
+    let camera = |n: &String| n.starts_with("camera.");
+    if names.iter().any(|n| n == "camera.tilt") && names.iter().any(|n| !camera(n)) {
+        return format!(
+            "tilt–refraction degeneracy: a change of the camera's tilt and of the air ({}) move the marks alike (every mark at one distance bends by one angle); add a horizon mark, or marks at other distances, or fix `camera.tilt`",
+            names.join(", ")
+        );
+    }
+    let amplitudes: Vec<usize> = (0..all.len()).filter(|k| amplitude[*k]).collect();
     let is_gauge = !amplitudes.is_empty()
-        && combination.iter().all(|(k, _)| free[*k].is_amplitude())
+        && combination.iter().all(|(k, _)| amplitude[*k])
         && combination.len() == amplitudes.len()
         && {
             // Direction ∝ the amplitudes themselves.

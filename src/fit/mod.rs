@@ -11,6 +11,7 @@ pub mod identify;
 pub mod lm;
 pub mod nelder_mead;
 pub mod objective;
+pub mod photo;
 pub mod report;
 pub mod solve;
 pub mod surrogate;
@@ -49,33 +50,65 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
     let objective = Objective::from_problem(problem);
     let settings = &problem.solver;
     let surrogate = surrogate::choose(&objective, settings, objective.start().as_slice());
+    let bounds = problem.all_bounds();
     let solution = solve::solve_with_surrogate(
         &objective,
         surrogate.as_ref(),
         settings,
-        &problem.bounds,
+        &bounds,
         settings.target_objective,
         hook,
     )?;
     crate::interrupt::check()?;
     let medium = objective.medium(&solution.x);
     let (_, jac) = objective.jacobian(&solution.x);
-    let ident = identify::analyse(&jac, &solution.x, &problem.free, solution.objective);
-    let traced = trace_pairs(problem, &medium);
+    let names = objective.names();
+    let ident = identify::analyse_named(
+        &jac,
+        &solution.x,
+        &names,
+        &objective.amplitudes(),
+        solution.objective,
+        // A photo's marks' noise (pixels, the residuals' unit).
+        problem.photo.as_ref().and_then(|p| p.noise).map(|s| s * s),
+    );
+    // The pairs as the fitted camera launches them (a photo problem's).
+    let at_fit;
+    let traced_problem = if problem.photo.is_some() {
+        let mut p = problem.clone();
+        p.pairs = objective.pairs_at(&solution.x);
+        at_fit = p;
+        &at_fit
+    } else {
+        problem
+    };
+    let mut traced = trace_pairs(traced_problem, &medium);
+    let photo = problem
+        .photo
+        .as_ref()
+        .and_then(|s| photo::photo_report(&objective, &solution.x, &s.image.display().to_string()));
+    if let Some(p) = &photo {
+        // The horizon marks' rows count in F too.
+        traced.totals.objective += p
+            .marks
+            .iter()
+            .filter(|m| m.horizon)
+            .map(|m| 0.5 * m.residual * m.residual)
+            .sum::<f64>();
+    }
     let wall_time_s = started.elapsed().as_secs_f64();
     let (residuals, jacobians, rhs) = objective.counts();
 
     let x0 = objective.start();
-    let parameters = problem
-        .free
+    let parameters = names
         .iter()
         .enumerate()
-        .map(|(k, p)| {
-            let (lo, hi) = problem.bounds[k];
+        .map(|(k, name)| {
+            let (lo, hi) = bounds[k];
             let bounded = lo.is_finite() || hi.is_finite();
             let v = solution.x[k];
             ParamReport {
-                name: p.to_string(),
+                name: name.clone(),
                 start: x0[k],
                 value: v,
                 standard_error: ident.params[k].standard_error,
@@ -143,12 +176,13 @@ fn fit_as_is(problem: &Problem, hook: Option<IterateHook>) -> Result<FitReport> 
             })
             .collect(),
         history: History {
-            param_names: problem.free.iter().map(|p| p.to_string()).collect(),
+            param_names: names.clone(),
             runs: solution.runs.into_iter().map(|r| r.history).collect(),
         },
         trace: problem.trace_spec.clone(),
         implied_air,
         grow: None,
+        photo,
     };
     Ok(report)
 }

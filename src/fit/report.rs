@@ -141,4 +141,7 @@ pub struct FitReport {
     /// How the model was grown (`mirage fit --grow`), step by step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grow: Option<crate::fit::grow::GrowReport>,
+    /// A photo problem's camera and marks (`docs/photo.md`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photo: Option<crate::fit::photo::PhotoReport>,
 }

@@ -24,6 +24,7 @@
 //! | `trace` | `method`: `rk4` (with `step`, metres) or `dopri5` (alias `adaptive`, with `tolerance`); optional `max_length` |
 //! | `solver` | `method`: `lm`, `nelder-mead` or `auto` (LM, restarts, Nelder–Mead fallback); `max_iterations`, `starts`, `ftol`, `xtol`, `gtol`, `seed`, `target_objective` (m², default 1e-12), `simplex_xtol`, `simplex_ftol`; `grow`, `noise`, `max_terms` (`crate::fit::grow`) |
 
+mod photo;
 mod solver;
 mod trace;
 
@@ -38,6 +39,7 @@ use crate::geo::Site;
 use crate::io::json::{parse_json, read_input};
 use crate::medium::{Medium, Param};
 use crate::pair::{PairEntry, PointPair};
+use crate::photo::spec::{MarkEntry, PhotoSetup, PhotoSpec};
 use crate::trace::{EarthSpec, TraceOptions};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -61,8 +63,19 @@ pub struct ProblemFile {
     /// Bounds per free parameter.
     #[serde(default)]
     pub bounds: BTreeMap<String, [f64; 2]>,
-    /// The point pairs, each with its optional endpoint noise.
+    /// The point pairs, each with its optional endpoint noise (none in a
+    /// photo problem: its marks are its observations).
+    #[serde(default)]
     pub pairs: Vec<PairEntry>,
+    /// The photograph and its camera (`docs/photo.md`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub photo: Option<PhotoSpec>,
+    /// The marks on the photograph.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub marks: Vec<MarkEntry>,
+    /// The marks' noise σ (pixels).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
     /// Integration settings.
     #[serde(default)]
     pub trace: TraceSpec,
@@ -140,11 +153,24 @@ pub struct Problem {
     /// What a residual measures; with [`Residual::Angle`] each pair's
     /// weight was divided by its range |target − origin| at load.
     pub residual: Residual,
+    /// The photograph, its camera and marks (`docs/photo.md`): the pairs
+    /// are then its target marks', in order, with residuals in pixels.
+    pub photo: Option<PhotoSetup>,
 }
 
 pub use crate::geo::earth_of;
 
 impl Problem {
+    /// The bounds of every fitted number: the medium's free parameters',
+    /// then a photo's camera's (the order of the fit's x).
+    pub fn all_bounds(&self) -> Vec<(f64, f64)> {
+        let mut b = self.bounds.clone();
+        if let Some(p) = &self.photo {
+            b.extend(&p.bounds);
+        }
+        b
+    }
+
     /// Reads and validates a problem file.
     pub fn load(path: &Path) -> Result<Problem> {
         Problem::parse(&read_input(path)?, path)
@@ -197,7 +223,11 @@ impl Problem {
         }
 
         let mut free = Vec::with_capacity(file.free.len());
+        let is_camera = |name: &str| name.starts_with("camera.");
         for (i, name) in file.free.iter().enumerate() {
+            if is_camera(name) {
+                continue;
+            }
             let p: Param = name.parse().map_err(|e: crate::medium::ParamParseError| {
                 bad(format!("free[{i}]"), e.to_string())
             })?;
@@ -218,18 +248,71 @@ impl Problem {
             }
             free.push(p);
         }
-        if !free.is_empty() && file.pairs.is_empty() {
+        let photo = photo::load(
+            photo::PhotoFields {
+                photo: file.photo.as_ref(),
+                marks: &file.marks,
+                noise: file.noise,
+                free: (file.free.iter().enumerate())
+                    .filter(|(_, n)| is_camera(n))
+                    .map(|(i, n)| (i, n.as_str()))
+                    .collect(),
+                bounds: (file.bounds.iter())
+                    .filter(|(n, _)| is_camera(n))
+                    .map(|(n, b)| (n.as_str(), *b))
+                    .collect(),
+            },
+            path,
+            file.site.as_ref(),
+            earth,
+        )?;
+        let photo = match photo {
+            None => None,
+            Some((setup, mark_pairs)) => {
+                if !file.pairs.is_empty() {
+                    return Err(bad(
+                        "pairs".into(),
+                        "a photo problem's observations are its `marks`: give no `pairs` beside them".into(),
+                    ));
+                }
+                if file.residual != Residual::Distance {
+                    return Err(bad(
+                        "residual".into(),
+                        "a photo problem's residuals are in pixels: leave `residual` out".into(),
+                    ));
+                }
+                if setup.marks.iter().any(|m| m.target.is_none())
+                    && !crate::medium::IndexField::is_stratified(&file.medium.field())
+                {
+                    return Err(bad(
+                        "marks".into(),
+                        format!(
+                            "horizon marks need air that depends on height alone; this medium ({}) has areal terms (hot spots)",
+                            file.medium.kind_name()
+                        ),
+                    ));
+                }
+                pairs = mark_pairs;
+                Some(setup)
+            }
+        };
+        let observations = pairs.len() + photo.as_ref().map_or(0, |p| p.marks.len() - pairs.len());
+        let camera_free = photo.as_ref().map_or(0, |p| p.free.len());
+        if free.len() + camera_free > 0 && observations == 0 {
             return Err(bad(
                 "pairs".into(),
                 format!(
                     "{} free parameter(s) but no point pairs to fit them to",
-                    free.len()
+                    free.len() + camera_free
                 ),
             ));
         }
 
         let mut bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); free.len()];
         for (name, &[low, high]) in &file.bounds {
+            if is_camera(name) {
+                continue;
+            }
             let field = format!("bounds.{name}");
             let p: Param = name
                 .parse()
@@ -276,6 +359,10 @@ impl Problem {
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "problem".into())
         });
+        let pair_noise = match &photo {
+            Some(p) => vec![p.noise; pairs.len()],
+            None => file.pairs.iter().map(|p| p.noise).collect(),
+        };
         Ok(Problem {
             source: path.to_path_buf(),
             name,
@@ -284,11 +371,12 @@ impl Problem {
             free,
             bounds,
             pairs,
-            pair_noise: file.pairs.iter().map(|p| p.noise).collect(),
+            pair_noise,
             trace,
             trace_spec,
             solver,
             residual: file.residual,
+            photo,
         })
     }
 }

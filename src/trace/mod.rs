@@ -24,7 +24,7 @@ pub use stepper::{Method, rk4_step};
 
 pub(crate) use event::first_ground_crossing;
 
-pub use scalar::trace;
+pub use scalar::{trace, trace_launched};
 
 use crate::math::{Real, V3};
 use serde::Serialize;

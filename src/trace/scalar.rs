@@ -27,6 +27,21 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
     options: &TraceOptions,
     path: Option<&mut Vec<RayState>>,
 ) -> Trace<T> {
+    trace_launched(field, origin, direction.lift(), target, options, path)
+}
+
+/// [`trace`] with a launch direction in `T`: its derivative parts (tangent
+/// to the unit sphere: d·∂d = 0) carry the endpoint's derivatives with
+/// respect to whatever set the direction (a camera's orientation,
+/// `crate::fit::objective`), through the same steps.
+pub fn trace_launched<T: Real, F: IndexField<T> + ?Sized>(
+    field: &F,
+    origin: V3,
+    direction: V3<T>,
+    target: Option<&TargetPlane>,
+    options: &TraceOptions,
+    path: Option<&mut Vec<RayState>>,
+) -> Trace<T> {
     match options.earth {
         Earth::Flat => trace_over(field, origin, direction, target, options, path),
         Earth::Round { radius } => {
@@ -41,7 +56,7 @@ pub fn trace<T: Real, F: IndexField<T> + ?Sized>(
 fn trace_over<T: Real, F: IndexField<T> + ?Sized>(
     field: &F,
     origin: V3,
-    direction: V3,
+    direction: V3<T>,
     target: Option<&TargetPlane>,
     options: &TraceOptions,
     mut path: Option<&mut Vec<RayState>>,
@@ -58,7 +73,7 @@ fn trace_over<T: Real, F: IndexField<T> + ?Sized>(
     let (delta0, _) = field.delta_gradient(x0);
     let mut y = RayState {
         x: x0,
-        v: direction.lift::<T>() * (delta0 + 1.0),
+        v: direction * (delta0 + 1.0),
         s: T::cst(0.0),
     };
     let mut f = state::rate(field, &y, &mut stats.rhs_evaluations);

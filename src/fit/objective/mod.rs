@@ -8,6 +8,10 @@
 //! step sizes come from the real parts only, which freezes the step sequence for
 //! the derivative: no step-control noise, unlike finite differences.
 
+mod photo;
+
+pub use photo::{PhotoPart, eps1, eps2, square_to, with_eps};
+
 use crate::math::Real;
 use crate::medium::{Field, Medium, PairFields, Param};
 use crate::pair::PointPair;
@@ -18,6 +22,7 @@ use crate::trace::{Trace, TraceOptions};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{DualSVec64, DualStruct};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -64,6 +69,16 @@ pub struct Objective {
     /// included, and the fit's report needs it there again (standard errors,
     /// identifiability): the memo serves the second request.
     last_jacobian: Mutex<Option<Memo>>,
+    /// A photo problem's camera: its free numbers follow the medium's in
+    /// x, and it sets the pairs' directions and weights at each point.
+    photo: Option<PhotoPart>,
+}
+
+/// The pairs and their ray jobs at one parameter point (a photo's camera
+/// moves them; otherwise the objective's own).
+struct Rays<'a> {
+    pairs: Cow<'a, [PointPair]>,
+    jobs: Cow<'a, [RayJob]>,
 }
 
 impl Clone for Objective {
@@ -90,6 +105,47 @@ impl Objective {
             jacobian_evaluations: AtomicU64::new(0),
             rhs_evaluations: AtomicU64::new(0),
             last_jacobian: Mutex::new(None),
+            photo: None,
+        }
+    }
+
+    /// The same map with a photo's camera (`docs/photo.md`): its free
+    /// numbers are appended to x, and its horizon marks' residuals follow
+    /// the pairs'.
+    pub fn with_photo(mut self, photo: Option<PhotoPart>) -> Objective {
+        self.photo = photo;
+        self
+    }
+
+    /// The camera's part, if any.
+    pub fn photo(&self) -> Option<&PhotoPart> {
+        self.photo.as_ref()
+    }
+
+    /// The pairs at `x` (a photo's camera sets their directions and
+    /// weights; otherwise the objective's own).
+    pub fn pairs_at(&self, x: &[f64]) -> Vec<PointPair> {
+        self.rays(x).pairs.into_owned()
+    }
+
+    /// The pairs and jobs at `x`.
+    fn rays(&self, x: &[f64]) -> Rays<'_> {
+        match &self.photo {
+            None => Rays {
+                pairs: Cow::Borrowed(&self.pairs),
+                jobs: Cow::Borrowed(&self.jobs),
+            },
+            Some(photo) => {
+                let pairs = photo.pairs_at(&self.pairs, &x[self.free.len().min(x.len())..]);
+                let jobs = pairs
+                    .iter()
+                    .map(|p| p.ray_job_on(self.options.earth))
+                    .collect();
+                Rays {
+                    pairs: Cow::Owned(pairs),
+                    jobs: Cow::Owned(jobs),
+                }
+            }
         }
     }
 
@@ -102,11 +158,37 @@ impl Objective {
             self.pairs.clone(),
             options,
         )
+        .with_photo(self.photo.clone())
     }
 
     /// The residual map of a problem file.
     pub fn from_problem(p: &Problem) -> Self {
-        Objective::new(p.medium.clone(), p.free.clone(), p.pairs.clone(), p.trace)
+        let photo = p
+            .photo
+            .as_ref()
+            .map(|s| PhotoPart::new(s, &p.pairs, p.trace.earth));
+        Objective::new(p.medium.clone(), p.free.clone(), p.pairs.clone(), p.trace).with_photo(photo)
+    }
+
+    /// The names of the parameters in x: the medium's, then the camera's.
+    pub fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.free.iter().map(|p| p.to_string()).collect();
+        if let Some(photo) = &self.photo {
+            names.extend(photo.free().iter().map(|p| p.to_string()));
+        }
+        names
+    }
+
+    /// Whether parameter k of x is an amplitude of the logistic model (the
+    /// gauge, `crate::fit::identify`).
+    pub fn amplitudes(&self) -> Vec<bool> {
+        let mut a: Vec<bool> = self.free.iter().map(|p| p.is_amplitude()).collect();
+        a.extend(
+            self.photo
+                .iter()
+                .flat_map(|p| p.free().iter().map(|_| false)),
+        );
+        a
     }
 
     /// The free parameters, in order.
@@ -124,24 +206,31 @@ impl Objective {
         &self.options
     }
 
-    /// Number of residuals (3 per pair).
+    /// Number of residuals (3 per pair, then 1 per horizon mark).
     pub fn len(&self) -> usize {
-        3 * self.pairs.len()
+        3 * self.pairs.len() + self.photo.as_ref().map_or(0, |p| p.horizon_len())
     }
 
     /// Whether there are no residuals.
     pub fn is_empty(&self) -> bool {
-        self.pairs.is_empty()
+        self.len() == 0
     }
 
     /// The starting values of the free parameters.
     pub fn start(&self) -> DVector<f64> {
+        let camera = self.photo.iter().flat_map(|p| p.start());
         DVector::from_iterator(
-            self.free.len(),
+            self.dimension(),
             self.free
                 .iter()
-                .map(|p| self.template.get(*p).unwrap_or(f64::NAN)),
+                .map(|p| self.template.get(*p).unwrap_or(f64::NAN))
+                .chain(camera),
         )
+    }
+
+    /// The number of parameters in x (the medium's and the camera's).
+    pub fn dimension(&self) -> usize {
+        self.free.len() + self.photo.as_ref().map_or(0, |p| p.free().len())
     }
 
     /// The medium with the free parameters set to `x`.
@@ -166,13 +255,15 @@ impl Objective {
     /// result is identical for any number of threads.
     pub fn residuals(&self, x: &[f64]) -> (DVector<f64>, Vec<PairFlags>) {
         self.residual_evaluations.fetch_add(1, Ordering::Relaxed);
-        let fields = self.fields(&self.medium(x));
+        let medium = self.medium(x);
+        let fields = self.fields(&medium);
+        let rays = self.rays(x);
         let batch = BatchOptions::from_trace_options(&self.options);
         let mut traces = vec![Trace::default(); self.pairs.len()];
         // One batch per wavelength (a single one, of every pair in order,
         // without per-pair wavelengths).
         for (g, field) in fields.fields().iter().enumerate() {
-            let (members, jobs) = self.group(fields.groups(), g);
+            let (members, jobs) = self.group(&rays, fields.groups(), g);
             let mut part = vec![Trace::default(); members.len()];
             // Chunks of one lane width; the split is fixed, so threads only
             // change who computes a chunk, not what it computes.
@@ -191,7 +282,7 @@ impl Objective {
         }
         let mut r = DVector::zeros(self.len());
         let mut flags = Vec::with_capacity(self.pairs.len());
-        for (i, (t, pair)) in traces.iter().zip(&self.pairs).enumerate() {
+        for (i, (t, pair)) in traces.iter().zip(rays.pairs.iter()).enumerate() {
             let ri = (t.endpoint - pair.target()) * pair.weight;
             r.fixed_rows_mut::<3>(3 * i).copy_from_slice(&ri.to_array());
             flags.push(PairFlags {
@@ -201,14 +292,19 @@ impl Objective {
             self.rhs_evaluations
                 .fetch_add(t.stats.rhs_evaluations, Ordering::Relaxed);
         }
+        if let Some(photo) = &self.photo {
+            let h = photo.horizon_residuals(&medium, &x[self.free.len()..]);
+            r.rows_mut(3 * self.pairs.len(), h.len())
+                .copy_from_slice(&h);
+        }
         (r, flags)
     }
 
     /// The pairs traced through field `g` (per pair, its field index in
     /// `groups`), in order, and their ray jobs.
-    fn group(&self, groups: &[usize], g: usize) -> (Vec<usize>, Vec<RayJob>) {
+    fn group(&self, rays: &Rays, groups: &[usize], g: usize) -> (Vec<usize>, Vec<RayJob>) {
         let members: Vec<usize> = (0..self.pairs.len()).filter(|&i| groups[i] == g).collect();
-        let jobs = members.iter().map(|&i| self.jobs[i]).collect();
+        let jobs = members.iter().map(|&i| rays.jobs[i]).collect();
         (members, jobs)
     }
 
@@ -256,18 +352,33 @@ impl Objective {
         self.jacobian_evaluations.fetch_add(1, Ordering::Relaxed);
         let n = self.free.len();
         let mut r = DVector::zeros(self.len());
-        let mut jac = DMatrix::zeros(self.len(), n);
+        let mut jac = DMatrix::zeros(self.len(), self.dimension());
         let base = self.medium(x);
+        let rays = self.rays(x);
         let mut first = 0;
         while first < n || (n == 0 && first == 0) {
             let width = (n - first).min(CHUNK);
             let cols = first..first + width;
             match width {
-                0..=2 => self.jacobian_chunk::<2>(&base, cols, lanes, &mut r, &mut jac),
-                3..=4 => self.jacobian_chunk::<4>(&base, cols, lanes, &mut r, &mut jac),
-                _ => self.jacobian_chunk::<8>(&base, cols, lanes, &mut r, &mut jac),
+                0..=2 => self.jacobian_chunk::<2>(&base, &rays, cols, lanes, &mut r, &mut jac),
+                3..=4 => self.jacobian_chunk::<4>(&base, &rays, cols, lanes, &mut r, &mut jac),
+                _ => self.jacobian_chunk::<8>(&base, &rays, cols, lanes, &mut r, &mut jac),
             }
             first += width.max(1);
+        }
+        if let Some(photo) = &self.photo {
+            let camera = &x[n..];
+            let m = self.pairs.len();
+            // The target marks' camera columns (through the launch
+            // direction and f), then the horizon rows.
+            photo.camera_columns(&base, &rays.pairs, &self.options, camera, &r, &mut jac, n);
+            let (h, dh) = photo.horizon_rows(&base, &self.free, camera);
+            for (k, (hk, row)) in h.iter().zip(dh).enumerate() {
+                r[3 * m + k] = *hk;
+                for (c, v) in row.into_iter().enumerate() {
+                    jac[(3 * m + k, c)] = v;
+                }
+            }
         }
         (r, jac)
     }
@@ -287,6 +398,7 @@ impl Objective {
     fn jacobian_chunk<const N: usize>(
         &self,
         base: &Medium,
+        rays: &Rays,
         cols: std::ops::Range<usize>,
         lanes: bool,
         r: &mut DVector<f64>,
@@ -300,10 +412,10 @@ impl Objective {
             let plain = self.fields(base);
             if N <= 4 {
                 let seeded = self.fields(&self.seeded::<4>(base, &cols));
-                self.tangent_rows::<N, 4>(&plain, &seeded, &mut rows);
+                self.tangent_rows::<N, 4>(rays, &plain, &seeded, &mut rows);
             } else {
                 let seeded = self.fields(&self.seeded::<8>(base, &cols));
-                self.tangent_rows::<N, 8>(&plain, &seeded, &mut rows);
+                self.tangent_rows::<N, 8>(rays, &plain, &seeded, &mut rows);
             }
         }
         // Whatever the lanes did not give: dual numbers, pair by pair. The
@@ -319,7 +431,7 @@ impl Objective {
             .par_iter()
             .map(|&i| {
                 let fields = fields.as_ref().expect("compiled when a row is missing");
-                self.dual_row::<N>(fields.of(i), i)
+                self.dual_row::<N>(fields.of(i), &rays.pairs[i])
             })
             .collect();
         for (i, row) in missing.into_iter().zip(dual) {
@@ -344,6 +456,7 @@ impl Objective {
     /// plane keeps `None`.
     fn tangent_rows<const N: usize, const P: usize>(
         &self,
+        rays: &Rays,
         plain: &PairFields,
         seeded: &PairFields<D<P>>,
         rows: &mut [Option<Row<N>>],
@@ -353,7 +466,7 @@ impl Objective {
             let (Field::Logistic(field), Field::Logistic(dual)) = (field, dual) else {
                 continue;
             };
-            let (members, jobs) = self.group(plain.groups(), g);
+            let (members, jobs) = self.group(rays, plain.groups(), g);
             let mut traces = vec![Trace::default(); members.len()];
             let ends: Vec<_> = jobs
                 .par_chunks(TANGENT_CHUNK)
@@ -368,7 +481,7 @@ impl Objective {
                 .collect();
             for ((i, t), end) in members.into_iter().zip(traces).zip(ends) {
                 let Some(d) = end else { continue };
-                let pair = &self.pairs[i];
+                let pair = &rays.pairs[i];
                 let ri = (t.endpoint - pair.target()) * pair.weight;
                 let di = d.map(|c| std::array::from_fn(|k| c[k] * pair.weight));
                 rows[i] = Some((ri.to_array(), di, t.stats.rhs_evaluations));
@@ -377,12 +490,12 @@ impl Objective {
     }
 
     /// Pair `i`'s row by dual numbers through the scalar tracer.
-    fn dual_row<const N: usize>(&self, field: &Field<D<N>>, i: usize) -> Row<N> {
+    fn dual_row<const N: usize>(&self, field: &Field<D<N>>, pair: &PointPair) -> Row<N> {
         if crate::interrupt::requested() {
             // Ctrl-C: as in `residuals`, a row to be discarded.
             return ([0.0; 3], [[0.0; N]; 3], 0);
         }
-        let (t, res) = self.pairs[i].evaluate::<D<N>, _>(field, &self.options, None);
+        let (t, res) = pair.evaluate::<D<N>, _>(field, &self.options, None);
         let comps = [res.x, res.y, res.z];
         let mut d = [[0.0; N]; 3];
         for (row, c) in d.iter_mut().zip(&comps) {
