@@ -832,12 +832,7 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
     let image = renderer.render();
     // The last cancellation point: once writing starts, it finishes.
     crate::interrupt::check()?;
-    let tone = match options.shading {
-        Shading::Lit => output::ToneMap::Filmic {
-            exposure: scene.exposure,
-        },
-        Shading::Albedo => output::ToneMap::Clamp,
-    };
+    let tone = output::ToneMap::of(options.shading, scene.exposure);
     let png = output::encode_png(image.width, image.height, &image.pixels, tone)?;
     let exr = match &o.exr {
         Some(_) => Some(output::encode_exr(
