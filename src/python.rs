@@ -23,6 +23,7 @@
 //!   written anywhere.
 
 use crate::error::Error;
+use crate::fit::ensemble::{EnsemblePlan, EnsembleSettings, Member};
 use crate::math::V3;
 use crate::medium::{IndexField, Medium};
 use crate::problem::{Problem, ProblemFile};
@@ -243,22 +244,16 @@ fn fit(
         .map_err(|e| to_py(py, Error::encode("the result as JSON", e)))
 }
 
-/// Renders a scene: `(width, height, bytes)`, the bytes linear radiance as
-/// little-endian `f32` RGB, row-major, top row first (what `--exr` writes).
+/// Checks [`render`]'s size arguments without rendering (so that a batch of
+/// frames fails before any work); errors name the argument.
 #[pyfunction]
-#[pyo3(signature = (text, path, width=None, height=None, spp=None, albedo=false, straight=false, threads=None))]
-#[allow(clippy::too_many_arguments)]
-fn render<'py>(
-    py: Python<'py>,
-    text: &str,
-    path: &str,
+#[pyo3(signature = (width=None, height=None, spp=None))]
+fn render_check(
+    py: Python<'_>,
     width: Option<u32>,
     height: Option<u32>,
     spp: Option<u32>,
-    albedo: bool,
-    straight: bool,
-    threads: Option<usize>,
-) -> PyResult<(u32, u32, Bound<'py, PyBytes>)> {
+) -> PyResult<()> {
     use crate::scene::description::{MAX_IMAGE_SIDE, MAX_SAMPLES_PER_PIXEL};
     for (name, v, max) in [
         ("width", width, MAX_IMAGE_SIDE),
@@ -275,6 +270,29 @@ fn render<'py>(
             ));
         }
     }
+    Ok(())
+}
+
+/// Renders a scene: `(width, height, bytes)`, the bytes linear radiance as
+/// little-endian `f32` RGB, row-major, top row first (what `--exr` writes);
+/// with `srgb`, the 8-bit sRGB values of `mirage render`'s PNG instead (three
+/// bytes a pixel, tone-mapped by the scene's `exposure`).
+#[pyfunction]
+#[pyo3(signature = (text, path, width=None, height=None, spp=None, albedo=false, straight=false, threads=None, srgb=false))]
+#[allow(clippy::too_many_arguments)]
+fn render<'py>(
+    py: Python<'py>,
+    text: &str,
+    path: &str,
+    width: Option<u32>,
+    height: Option<u32>,
+    spp: Option<u32>,
+    albedo: bool,
+    straight: bool,
+    threads: Option<usize>,
+    srgb: bool,
+) -> PyResult<(u32, u32, Bound<'py, PyBytes>)> {
+    render_check(py, width, height, spp)?;
     let scene = Scene::parse(text, &PathBuf::from(path)).map_err(|e| to_py(py, e))?;
     let options = RenderOptions {
         shading: if albedo {
@@ -289,7 +307,16 @@ fn render<'py>(
         progress: false,
         ..RenderOptions::default()
     };
-    let image = run(py, threads, move || crate::render::render(&scene, &options))?;
+    let tone = crate::render::tone_map(options.shading, scene.exposure);
+    let image = run(py, threads, move || {
+        let image = crate::render::render(&scene, &options);
+        let srgb = srgb.then(|| crate::render::output::to_srgb8(&image.pixels, tone));
+        (image, srgb)
+    })?;
+    let (image, srgb) = image;
+    if let Some(raw) = srgb {
+        return Ok((image.width, image.height, PyBytes::new(py, &raw)));
+    }
     let mut bytes = Vec::with_capacity(image.pixels.len() * 12);
     for p in &image.pixels {
         for c in p {
@@ -366,6 +393,162 @@ fn medium_eval<'py>(
     Ok((PyBytes::new(py, &delta), PyBytes::new(py, &gradient)))
 }
 
+/// An ensemble's problem, settings and truth, checked before any work as
+/// `mirage ensemble` checks its problem and flags; errors name the keyword
+/// argument (`n`, `noise`, `bootstrap`) or the document's field.
+#[allow(clippy::too_many_arguments)]
+fn ensemble_inputs(
+    py: Python<'_>,
+    text: &str,
+    path: &str,
+    n: usize,
+    noise: Option<f64>,
+    bootstrap: bool,
+    seed: u64,
+    truth: Option<(&str, &str)>,
+) -> PyResult<(ProblemFile, Problem, EnsembleSettings, Option<Medium>)> {
+    use crate::fit::ensemble::{check_members, check_problem};
+    let members = check_members(n).map_err(|e| argument_error(py, "n", e.to_string()))?;
+    let noise = noise
+        .map(crate::problem::check_noise)
+        .transpose()
+        .map_err(|e| argument_error(py, "noise", e.to_string()))?;
+    if bootstrap && noise.is_some() {
+        return Err(argument_error(
+            py,
+            "bootstrap",
+            "cannot be combined with noise: bootstrap resamples the pairs and adds no noise".into(),
+        ));
+    }
+    let (file, problem) = problem_of(text, path).map_err(|e| to_py(py, e))?;
+    check_problem(&problem).map_err(|e| to_py(py, e))?;
+    let truth = truth
+        .map(|(text, path)| crate::cli::ensemble::truth_of(text, std::path::Path::new(path)))
+        .transpose()
+        .map_err(|e| to_py(py, e))?;
+    let settings = EnsembleSettings {
+        members,
+        noise,
+        bootstrap,
+        seed,
+    };
+    Ok((file, problem, settings, truth))
+}
+
+/// Runs an ensemble of fits, as `mirage ensemble` does: the report as `-o`
+/// writes it (pretty JSON text). `n`, `noise`, `bootstrap`, `seed` are
+/// `-n`, `--noise`, `--bootstrap`, `--seed`; `truth` the text of a document
+/// with a `medium` (`--truth`'s file) and `truth_path` its name.
+#[pyfunction]
+#[pyo3(signature = (text, path, n, noise=None, bootstrap=false, seed=0, truth=None, truth_path="<truth>", threads=None))]
+#[allow(clippy::too_many_arguments)]
+fn ensemble(
+    py: Python<'_>,
+    text: &str,
+    path: &str,
+    n: usize,
+    noise: Option<f64>,
+    bootstrap: bool,
+    seed: u64,
+    truth: Option<&str>,
+    truth_path: &str,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    let (_, problem, settings, truth) = ensemble_inputs(
+        py,
+        text,
+        path,
+        n,
+        noise,
+        bootstrap,
+        seed,
+        truth.map(|t| (t, truth_path)),
+    )?;
+    let report = run(py, threads, move || {
+        crate::fit::ensemble::ensemble(&problem, &settings, truth.as_ref())
+    })?;
+    let report = report.map_err(|e| to_py(py, e))?;
+    serde_json::to_string_pretty(&report)
+        .map_err(|e| to_py(py, Error::encode("the ensemble as JSON", e)))
+}
+
+/// The first part of an ensemble: the best fit and the noise, as a plan
+/// (JSON text, [`EnsemblePlan::to_json`]) from which each member is one
+/// independent task ([`ensemble_member`]). Arguments as [`ensemble`]'s.
+#[pyfunction]
+#[pyo3(signature = (text, path, n, noise=None, bootstrap=false, seed=0, truth=None, truth_path="<truth>", threads=None))]
+#[allow(clippy::too_many_arguments)]
+fn ensemble_plan(
+    py: Python<'_>,
+    text: &str,
+    path: &str,
+    n: usize,
+    noise: Option<f64>,
+    bootstrap: bool,
+    seed: u64,
+    truth: Option<&str>,
+    truth_path: &str,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    let (file, problem, settings, truth) = ensemble_inputs(
+        py,
+        text,
+        path,
+        n,
+        noise,
+        bootstrap,
+        seed,
+        truth.map(|t| (t, truth_path)),
+    )?;
+    let plan = run(py, threads, move || {
+        EnsemblePlan::new(&problem, &settings, truth.as_ref()).and_then(|p| p.to_json(&file))
+    })?;
+    plan.map_err(|e| to_py(py, e))
+}
+
+/// A plan's text as the plan; errors name its field (in the file `<plan>`).
+fn plan_of(py: Python<'_>, plan: &str) -> PyResult<EnsemblePlan> {
+    EnsemblePlan::from_json(plan).map_err(|e| to_py(py, e))
+}
+
+/// Member `k` of a plan ([`EnsemblePlan::member`]): its parameters and F.
+/// The same numbers on any thread, process or machine.
+#[pyfunction]
+#[pyo3(signature = (plan, k, threads=None))]
+fn ensemble_member(
+    py: Python<'_>,
+    plan: &str,
+    k: usize,
+    threads: Option<usize>,
+) -> PyResult<(Vec<f64>, f64)> {
+    let plan = plan_of(py, plan)?;
+    let member = run(py, threads, move || plan.member(k))?;
+    let member = member.map_err(|e| to_py(py, e))?;
+    Ok((member.params, member.objective))
+}
+
+/// The report of a plan's members 0..N, given in that order as
+/// `(parameters, F)` ([`EnsemblePlan::summarise`]): what [`ensemble`]
+/// returns, with `wall_time_s` as its wall-clock time.
+#[pyfunction]
+#[pyo3(signature = (plan, members, wall_time_s))]
+fn ensemble_summarise(
+    py: Python<'_>,
+    plan: &str,
+    members: Vec<(Vec<f64>, f64)>,
+    wall_time_s: f64,
+) -> PyResult<String> {
+    let plan = plan_of(py, plan)?;
+    let members = members
+        .into_iter()
+        .map(|(params, objective)| Member { params, objective })
+        .collect();
+    let report = run(py, None, move || plan.summarise(members, wall_time_s))?;
+    let report = report.map_err(|e| to_py(py, e))?;
+    serde_json::to_string_pretty(&report)
+        .map_err(|e| to_py(py, Error::encode("the ensemble as JSON", e)))
+}
+
 /// Reads a sounding file (IGRA 2, Wyoming TEXT:LIST or CSV) into a real-air
 /// medium, as `mirage sounding` does: the medium's JSON text (what `-o`
 /// writes). `format` is `igra2`, `wyoming` or `csv` (default: inferred);
@@ -418,7 +601,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(trace, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(render_check, m)?)?;
     m.add_function(wrap_pyfunction!(medium_eval, m)?)?;
     m.add_function(wrap_pyfunction!(sounding, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_member, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_summarise, m)?)?;
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! `mirage ensemble` (`docs/ensemble.md`): the envelopes hold the truth at
 //! their nominal rate over a seeded family of synthetic problems, the same
-//! seed gives the same members on any number of threads, and bad input
-//! fails before any work.
+//! seed gives the same members on any number of threads, a plan sent as JSON
+//! gives the same members one at a time in any order, and bad input fails
+//! before any work.
 //!
 //! The family: an inversion over the round earth (height 8–20 m, strength
 //! and sharpness drawn) seen from 3–8 m by 10–16 sightings 2.5–8 km out in
@@ -13,10 +14,10 @@
 //! (21–33 of 40), and the 2.5–97.5 % band in at least 35.
 //! `MIRAGE_ENSEMBLE_CASES=N` runs N problems instead (100: 59–65 and 94–95).
 
-use mirage::fit::ensemble::{EnsembleSettings, ensemble};
+use mirage::fit::ensemble::{EnsemblePlan, EnsembleSettings, Member, ensemble};
 use mirage::fit::synthetic::retarget;
 use mirage::math::{SplitMix64, V3};
-use mirage::problem::Problem;
+use mirage::problem::{Problem, ProblemFile};
 use std::path::Path;
 use std::process::Command;
 
@@ -197,6 +198,103 @@ fn the_same_seed_gives_the_same_members_on_any_threads() {
     .unwrap();
     assert_eq!(boot.resampling.kind, "bootstrap");
     assert_ne!(one.members, boot.members);
+}
+
+/// A plan as another process gets it: written as JSON, read back, its
+/// members run one at a time, last first, then summarised. Members and
+/// report equal `ensemble()`'s bit for bit: on a logistic problem (with a
+/// truth), bootstrapped, on the Maine surveyor (angle residuals, a site and
+/// geographic points), on real air, and on a problem that grows (the
+/// members fit the grown model's terms).
+#[test]
+fn a_plan_sent_as_json_gives_the_members_and_report_of_the_whole() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+    let read = |name: &str| std::fs::read_to_string(root.join(name)).unwrap();
+    let mut grows: serde_json::Value =
+        serde_json::from_str(&read("grow/one-hot-spot.json")).unwrap();
+    grows["free"] = serde_json::json!(["background.a"]);
+    let settings = |members, noise, bootstrap| EnsembleSettings {
+        members,
+        noise,
+        bootstrap,
+        seed: 7,
+    };
+    let cases = [
+        (
+            "cold-sea.json",
+            read("cold-sea.json"),
+            settings(5, Some(0.02), false),
+            true,
+        ),
+        (
+            "cold-sea.json",
+            read("cold-sea.json"),
+            settings(5, None, true),
+            false,
+        ),
+        (
+            "maine-surveyor.json",
+            read("maine-surveyor.json"),
+            settings(4, Some(3.0), false),
+            false,
+        ),
+        (
+            "cold-sea-kelvin.json",
+            read("cold-sea-kelvin.json"),
+            settings(3, Some(0.01), false),
+            true,
+        ),
+        (
+            "grows.json",
+            grows.to_string(),
+            settings(3, Some(0.01), false),
+            false,
+        ),
+    ];
+    for (name, text, settings, with_truth) in cases {
+        let path = root.join(name);
+        let file: ProblemFile = serde_json::from_str(&text).unwrap();
+        let problem = Problem::from_file(file.clone(), &path).unwrap();
+        let truth = with_truth.then(|| problem.medium.clone());
+        let whole = ensemble(&problem, &settings, truth.as_ref()).unwrap();
+        let plan = EnsemblePlan::new(&problem, &settings, truth.as_ref()).unwrap();
+        let json = plan.to_json(&file).unwrap();
+        let again = EnsemblePlan::from_json(&json).unwrap();
+        assert_eq!(again.settings(), &settings);
+        let mut members: Vec<Member> = (0..settings.members)
+            .rev()
+            .map(|k| again.member(k).unwrap())
+            .collect();
+        members.reverse();
+        assert_eq!(members, whole.members, "{name}");
+        let mut report = again.summarise(members.clone(), 0.0).unwrap();
+        report.wall_time_s = whole.wall_time_s;
+        assert_eq!(
+            serde_json::to_value(&report).unwrap(),
+            serde_json::to_value(&whole).unwrap(),
+            "{name}"
+        );
+        // Too few members, or a member of another model, is refused.
+        let e = again
+            .summarise(members[1..].to_vec(), 0.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("members: "), "{e}");
+        let mut short = members.clone();
+        short[0].params.pop();
+        let e = again.summarise(short, 0.0).unwrap_err().to_string();
+        assert!(e.contains("member 0 has"), "{e}");
+    }
+    // A damaged plan names its field.
+    let problem = Problem::parse(&read("cold-sea.json"), &root.join("cold-sea.json")).unwrap();
+    let file: ProblemFile = serde_json::from_str(&read("cold-sea.json")).unwrap();
+    let plan = EnsemblePlan::new(&problem, &settings(2, Some(0.02), false), None).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&plan.to_json(&file).unwrap()).unwrap();
+    doc["sigma"].as_array_mut().unwrap().pop();
+    let e = EnsemblePlan::from_json(&doc.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("<plan>: sigma"), "{e}");
 }
 
 fn mirage(args: &[&str]) -> (Option<i32>, String) {

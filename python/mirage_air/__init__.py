@@ -12,6 +12,14 @@ for bit (``fit(p).to_json()`` is what ``mirage fit p -o result.json`` writes).
 >>> image = mirage_air.render("problems/scenes/road.json", width=160)
 >>> image.shape, image.dtype
 ((90, 160, 3), dtype('float32'))
+>>> spread = mirage_air.ensemble("problems/cold-sea.json", n=50, noise=0.02)
+>>> spread.parameters["inversion.height"].percentiles   # 2.5 … 97.5 %
+array([...])
+
+Many independent items (an ensemble's members, an animation's frames) run as
+one task each on any ``concurrent.futures.Executor`` or a Dask ``Client``
+(``executor=``), with the same results bit for bit as on the library's own
+threads; every result pickles.
 
 Arrays come back as NumPy arrays (float64 for geometry, float32 linear radiance
 for renders). Bad input raises :class:`InputError` (a ``ValueError``) whose
@@ -21,11 +29,14 @@ the GIL and stop on Ctrl-C (the computation they abandon ends on its own thread)
 
 from __future__ import annotations
 
+import concurrent.futures
 import json
+import numbers
 import os
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Union
+from typing import Any, ClassVar, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -41,11 +52,17 @@ __all__ = [
     "FitResult",
     "Sightlines",
     "History",
+    "EnsembleResult",
+    "ParameterSpread",
+    "Envelope",
     "load",
     "trace",
     "fit",
     "render",
     "sounding",
+    "ensemble",
+    "render_frames",
+    "write_video",
     "__version__",
 ]
 
@@ -351,13 +368,27 @@ def render(
     albedo: bool = False,
     straight: bool = False,
     threads: Optional[int] = None,
+    srgb: bool = False,
 ) -> np.ndarray:
     """Renders a scene as ``mirage render --exr`` does: an ``(H, W, 3)``
     float32 array of linear radiance, top row first. ``width``/``height``/
     ``spp`` override the scene's; ``albedo`` shows what each ray hits;
-    ``straight`` traces straight rays (δ ≡ 0) for comparison."""
+    ``straight`` traces straight rays (δ ≡ 0) for comparison. ``srgb=True``
+    returns the pixels of ``mirage render``'s PNG instead: ``(H, W, 3)``
+    uint8 sRGB, tone-mapped by the scene's ``exposure`` (what
+    :func:`write_video` takes)."""
     s = _scene(scene)
-    w, h, data = _native.render(s._text, s.path, width, height, spp, albedo, straight, threads)
+    return _render_frame(s._text, s.path, width, height, spp, albedo, straight, threads, srgb)
+
+
+def _render_frame(text: str, path: str, width: Optional[int], height: Optional[int],
+                  spp: Optional[int], albedo: bool, straight: bool,
+                  threads: Optional[int], srgb: bool) -> np.ndarray:
+    """One frame (a task of :func:`render_frames`): the scene's text in, an
+    array out."""
+    w, h, data = _native.render(text, path, width, height, spp, albedo, straight, threads, srgb)
+    if srgb:
+        return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3).copy()
     return np.frombuffer(data, dtype="<f4").reshape(h, w, 3).copy()
 
 
@@ -407,3 +438,339 @@ class Medium:
 
     def __repr__(self) -> str:
         return f"Medium({self.medium!r})"
+
+
+# ---------------------------------------------------------------------------
+# Many independent items: ensembles and frames, on threads or on an executor.
+
+
+def _argument_error(name: str, message: str) -> InputError:
+    """An :class:`InputError` about an argument of a call (no file)."""
+    err = InputError(f"{name}: {message}")
+    err.file, err.field = None, name
+    return err
+
+
+def _whole(name: str, value: Any, low: int, high: Optional[int] = None, what: str = "") -> int:
+    """``value`` as an int in [low, high], or an error naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise _argument_error(name, f"must be a whole number, got {value!r}")
+    v = int(value)
+    if v < low:
+        raise _argument_error(name, f"must be at least {low}{what}, got {v}")
+    if high is not None and v > high:
+        raise _argument_error(name, f"must be at most {high}, got {v}")
+    return v
+
+
+def _executor_of(executor: Any) -> Optional[concurrent.futures.Executor]:
+    """``None``, a ``concurrent.futures.Executor``, or a Dask ``Client`` (its
+    ``get_executor()``): where tasks go."""
+    if executor is None or isinstance(executor, concurrent.futures.Executor):
+        return executor
+    get = getattr(executor, "get_executor", None)
+    if callable(get):
+        return get()
+    raise _argument_error(
+        "executor",
+        f"must be None, a concurrent.futures.Executor or a dask.distributed.Client, got {type(executor).__name__}",
+    )
+
+
+def _gather(futures: List["concurrent.futures.Future[Any]"]) -> List[Any]:
+    """The futures' results in their order; on the first failure the rest
+    are cancelled and the failure raised."""
+    try:
+        return [f.result() for f in futures]
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+
+
+def _truth_of(truth: Any) -> Tuple[Optional[str], str]:
+    """The text of a document with a ``medium`` (what ``mirage ensemble
+    --truth`` reads) and the name that stands for it in messages."""
+    if truth is None:
+        return None, "<truth>"
+    if isinstance(truth, FitResult):
+        return json.dumps({"medium": truth.medium}, allow_nan=False), "<truth>"
+    if isinstance(truth, (Problem, Scene)):
+        return truth._text, truth.path
+    if isinstance(truth, Medium):
+        return json.dumps({"medium": truth.medium}, allow_nan=False), "<truth>"
+    if isinstance(truth, Mapping):
+        doc = truth if "medium" in truth else {"medium": dict(truth)}
+        text, _ = _read(doc)
+        return text, "<truth>"
+    text, path = _read(truth)
+    return text, path
+
+
+@dataclass(frozen=True)
+class ParameterSpread:
+    """One parameter across an ensemble: the best fit's value, its
+    linearised standard error (``None`` where the pairs do not determine
+    it), the members' mean, standard deviation and values at
+    :attr:`EnsembleResult.PERCENTILES` (``(5,)`` float64), and where the
+    ensemble and the linearised error disagree, in words (else ``None``)."""
+
+    best: float
+    standard_error: Optional[float]
+    mean: float
+    std: float
+    percentiles: np.ndarray
+    disagreement: Optional[str]
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """A profile across an ensemble on :attr:`EnsembleResult.heights`: the
+    best fit's value per height (``(H,)``), the members' values at
+    :attr:`EnsembleResult.PERCENTILES` per height (``(5, H)``), and the
+    truth's (``(H,)``) when one was given."""
+
+    best: np.ndarray
+    percentiles: np.ndarray
+    truth: Optional[np.ndarray]
+
+
+@dataclass(frozen=True)
+class EnsembleResult:
+    """An ensemble of fits (``mirage ensemble -o``'s report).
+
+    ``parameters``: per parameter path, its :class:`ParameterSpread`;
+    ``members``: ``(n, p)`` float64, member k's parameters in the order of
+    ``parameters``; ``member_objectives``: ``(n,)``, each member's F;
+    ``objective``: the best fit's F; ``medium``: the best fit's medium (a
+    dict in the file schema); ``resampling``: how the observations were
+    resampled (``kind``, ``noise``, ``noise_from``, ``seed``);
+    ``heights``: the profiles' heights (m) at ``at`` (x, z);
+    ``temperature`` (°C; ``implied`` for a medium other than real air) and
+    ``delta`` (n − 1): :class:`Envelope`\\ s; ``wall_time_s``: seconds;
+    ``report``: the whole report."""
+
+    #: The percentiles (per cent) of ``ParameterSpread.percentiles`` and of
+    #: the envelopes' rows.
+    PERCENTILES: ClassVar[Tuple[float, ...]] = (2.5, 16.0, 50.0, 84.0, 97.5)
+
+    parameters: Dict[str, ParameterSpread]
+    members: np.ndarray
+    member_objectives: np.ndarray
+    objective: float
+    medium: Dict[str, Any]
+    resampling: Dict[str, Any]
+    heights: np.ndarray
+    at: Tuple[float, float]
+    implied: bool
+    temperature: Envelope
+    delta: Envelope
+    wall_time_s: float
+    report: Dict[str, Any] = field(repr=False)
+    _json: str = field(repr=False, default="")
+
+    def to_json(self) -> str:
+        """The report as ``mirage ensemble -o`` writes it, byte for byte
+        (its ``wall_time_s`` aside)."""
+        return self._json
+
+    @classmethod
+    def _of(cls, text: str) -> "EnsembleResult":
+        r = json.loads(text)
+
+        def envelope(e: Dict[str, Any]) -> Envelope:
+            truth = e.get("truth")
+            return Envelope(
+                best=np.array(e["best"], dtype=np.float64),
+                percentiles=np.array(e["percentiles"], dtype=np.float64),
+                truth=None if truth is None else np.array(truth, dtype=np.float64),
+            )
+
+        params = {
+            p["name"]: ParameterSpread(
+                best=float(p["best"]),
+                standard_error=p["standard_error"],
+                mean=float(p["mean"]),
+                std=float(p["std"]),
+                percentiles=np.array(p["percentiles"], dtype=np.float64),
+                disagreement=p.get("disagreement"),
+            )
+            for p in r["parameters"]
+        }
+        members = r["members"]
+        prof = r["profiles"]
+        return cls(
+            parameters=params,
+            members=np.array([m["params"] for m in members], dtype=np.float64).reshape(len(members), len(params)),
+            member_objectives=np.array([m["objective"] for m in members], dtype=np.float64),
+            objective=float(r["objective"]),
+            medium=r["medium"],
+            resampling=r["resampling"],
+            heights=np.array(prof["heights"], dtype=np.float64),
+            at=(float(prof["at"][0]), float(prof["at"][1])),
+            implied=bool(prof["implied"]),
+            temperature=envelope(prof["temperature"]),
+            delta=envelope(prof["delta"]),
+            wall_time_s=float(r["wall_time_s"]),
+            report=r,
+            _json=text + "\n",
+        )
+
+
+def _ensemble_member(plan: str, k: int, threads: Optional[int]) -> Tuple[List[float], float]:
+    """Member k of a plan (a task of :func:`ensemble`): its parameters and F."""
+    return _native.ensemble_member(plan, k, threads)
+
+
+def ensemble(
+    problem: Source,
+    n: int,
+    noise: Optional[float] = None,
+    bootstrap: bool = False,
+    seed: int = 0,
+    executor: Any = None,
+    truth: Any = None,
+    threads: Optional[int] = None,
+) -> EnsembleResult:
+    """How sure a fit is, as ``mirage ensemble`` measures it
+    (``docs/ensemble.md``): the problem fitted once, then ``n`` more times to
+    observations resampled from the best fit, and the spread of the
+    parameters and of the temperature and n − 1 profiles.
+
+    ``noise``: the observations' σ (metres; arcseconds with angle
+    residuals), default the pairs' own ``noise``, else the fit's residual
+    scale; ``bootstrap=True`` draws the pairs with replacement instead;
+    ``seed``: member k is seeded by ``seed`` and k alone. ``truth``: the true
+    air, drawn beside the envelopes (a path or dict of a document with a
+    ``medium``, a medium dict, a :class:`Problem`, a :class:`FitResult` or a
+    :class:`Medium`).
+
+    ``executor=None``: on the library's threads (``threads`` of them,
+    default all cores), as the CLI. Otherwise a ``concurrent.futures``
+    executor or a Dask ``Client``: the best fit runs here, then each member
+    is one task there (on ``threads`` threads each, default 1), and the
+    report is assembled here. A task lost with its worker is re-run by Dask
+    with the same result. Either way the result is the CLI's bit for bit
+    (``to_json()`` is ``mirage ensemble -o``'s file, ``wall_time_s`` aside).
+
+    Bad arguments and a bad problem raise :class:`InputError` naming the
+    argument or the field before any work."""
+    p = _problem(problem)
+    n = _whole("n", n, 1, what=" member")
+    seed = _whole("seed", seed, 0, 2**64 - 1)
+    if noise is not None and (isinstance(noise, bool) or not isinstance(noise, numbers.Real)):
+        raise _argument_error("noise", f"must be a number, got {noise!r}")
+    noise = None if noise is None else float(noise)
+    if threads is not None:
+        threads = _whole("threads", threads, 1)
+    truth_text, truth_path = _truth_of(truth)
+    pool = _executor_of(executor)
+    if pool is None:
+        return EnsembleResult._of(_native.ensemble(
+            p._text, p.path, n, noise, bool(bootstrap), seed, truth_text, truth_path, threads))
+    started = time.perf_counter()
+    plan = _native.ensemble_plan(p._text, p.path, n, noise, bool(bootstrap), seed, truth_text, truth_path)
+    per_task = 1 if threads is None else threads
+    members = _gather([pool.submit(_ensemble_member, plan, k, per_task) for k in range(n)])
+    return EnsembleResult._of(_native.ensemble_summarise(plan, members, time.perf_counter() - started))
+
+
+def render_frames(
+    scenes: Iterable[Source],
+    executor: Any = None,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    spp: Optional[int] = None,
+    albedo: bool = False,
+    straight: bool = False,
+    srgb: bool = False,
+    threads: Optional[int] = None,
+) -> List[np.ndarray]:
+    """Renders a list of scenes (an animation's frames), as :func:`render`
+    renders one: a list of arrays in the scenes' order (``srgb=True``:
+    uint8 sRGB frames for :func:`write_video`).
+
+    ``executor=None``: frame after frame, each on the library's threads
+    (``threads``, default all cores). Otherwise a ``concurrent.futures``
+    executor or a Dask ``Client``: each frame is one task there (on
+    ``threads`` threads each, default 1). The frames are the same bit for
+    bit either way. A scene's ``medium_from`` file is read where the frame
+    renders (relative to the scene's path): on a cluster of many machines,
+    give the medium inline.
+
+    Every scene and argument is checked before any frame renders; a bad one
+    raises :class:`InputError` naming ``scenes[i]`` and its field."""
+    docs: List[Scene] = []
+    for i, source in enumerate(scenes):
+        try:
+            docs.append(_scene(source))
+        except InputError as e:
+            err = InputError(f"scenes[{i}]: {e}")
+            err.file = e.file
+            err.field = f"scenes[{i}]" if e.field in (None, "-") else f"scenes[{i}].{e.field}"
+            raise err from None
+        except TypeError as e:
+            raise TypeError(f"scenes[{i}]: {e}") from None
+    for name, v in (("width", width), ("height", height), ("spp", spp)):
+        if v is not None:
+            _whole(name, v, 1)
+    _native.render_check(width, height, spp)
+    if threads is not None:
+        threads = _whole("threads", threads, 1)
+    pool = _executor_of(executor)
+    args = (width, height, spp, bool(albedo), bool(straight))
+    if pool is None:
+        return [_render_frame(s._text, s.path, *args, threads, bool(srgb)) for s in docs]
+    per_task = 1 if threads is None else threads
+    return _gather([pool.submit(_render_frame, s._text, s.path, *args, per_task, bool(srgb)) for s in docs])
+
+
+#: How to get :func:`write_video`'s optional dependencies.
+VIDEO_DEPENDENCIES = "pip install imageio imageio-ffmpeg"
+
+
+def write_video(frames: Sequence[np.ndarray], path: Union[str, "os.PathLike[str]"],
+                fps: float = 12.0, quality: Optional[float] = 8.0) -> Path:
+    """Writes frames as a video (MP4, H.264, by imageio with imageio-ffmpeg:
+    optional dependencies, ``pip install imageio imageio-ffmpeg``): ``frames``
+    are ``(H, W, 3)`` uint8 sRGB arrays of one size (``render_frames(...,
+    srgb=True)``); an odd width or height is padded by one repeated column
+    or row (H.264's colour planes need even sizes). ``fps``: frames a
+    second; ``quality``: 0–10 (imageio's scale), ``None`` for ffmpeg's
+    default bit rate. Returns the path."""
+    try:
+        import imageio.v2 as iio
+        import imageio_ffmpeg  # noqa: F401  (the encoder imageio runs)
+    except ImportError as e:
+        raise ImportError(
+            f"write_video needs imageio and imageio-ffmpeg, which are not installed: {VIDEO_DEPENDENCIES}"
+        ) from e
+    frames = list(frames)
+    if not frames:
+        raise _argument_error("frames", "must hold at least one frame")
+    shape = None
+    for i, f in enumerate(frames):
+        a = np.asarray(f)
+        if a.dtype != np.uint8 or a.ndim != 3 or a.shape[2] != 3:
+            raise _argument_error(
+                "frames",
+                f"frame {i} must be an (H, W, 3) uint8 sRGB array (render with srgb=True), got {a.dtype} {a.shape}",
+            )
+        if shape is None:
+            shape = a.shape
+        elif a.shape != shape:
+            raise _argument_error("frames", f"frame {i} is {a.shape[1]}×{a.shape[0]}, frame 0 {shape[1]}×{shape[0]}")
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (np.isfinite(fps) and fps > 0):
+        raise _argument_error("fps", f"must be a finite number > 0, got {fps!r}")
+    if quality is not None and (isinstance(quality, bool) or not isinstance(quality, numbers.Real)
+                                or not 0 <= quality <= 10):
+        raise _argument_error("quality", f"must be a number from 0 to 10 or None, got {quality!r}")
+    h, w = shape[0], shape[1]
+    pad = ((0, h % 2), (0, w % 2), (0, 0))
+    out = Path(os.fspath(path))
+    with iio.get_writer(out, format="FFMPEG", mode="I", fps=float(fps), codec="libx264",
+                        pixelformat="yuv420p", quality=quality, macro_block_size=1) as writer:
+        for f in frames:
+            a = np.asarray(f)
+            writer.append_data(np.pad(a, pad, mode="edge") if h % 2 or w % 2 else a)
+    return out

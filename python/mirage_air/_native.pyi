@@ -1,7 +1,7 @@
 """Type stubs of the compiled module (src/python.rs); use the functions of
 ``mirage_air`` itself, which wrap these with NumPy arrays and result classes."""
 
-from typing import Optional, Tuple
+from typing import List, Optional, Tuple
 
 __version__: str
 
@@ -31,6 +31,32 @@ def render(
     albedo: bool = False,
     straight: bool = False,
     threads: Optional[int] = None,
+    srgb: bool = False,
 ) -> Tuple[int, int, bytes]: ...
+def render_check(width: Optional[int] = None, height: Optional[int] = None, spp: Optional[int] = None) -> None: ...
 def sounding(path: str, format: Optional[str] = None, site_height: Optional[float] = None) -> str: ...
 def medium_eval(medium: str, points: bytes, earth_radius: Optional[float] = None) -> Tuple[bytes, bytes]: ...
+def ensemble(
+    text: str,
+    path: str,
+    n: int,
+    noise: Optional[float] = None,
+    bootstrap: bool = False,
+    seed: int = 0,
+    truth: Optional[str] = None,
+    truth_path: str = "<truth>",
+    threads: Optional[int] = None,
+) -> str: ...
+def ensemble_plan(
+    text: str,
+    path: str,
+    n: int,
+    noise: Optional[float] = None,
+    bootstrap: bool = False,
+    seed: int = 0,
+    truth: Optional[str] = None,
+    truth_path: str = "<truth>",
+    threads: Optional[int] = None,
+) -> str: ...
+def ensemble_member(plan: str, k: int, threads: Optional[int] = None) -> Tuple[List[float], float]: ...
+def ensemble_summarise(plan: str, members: List[Tuple[List[float], float]], wall_time_s: float) -> str: ...

@@ -64,44 +64,24 @@ struct MediumOnly {
     medium: Medium,
 }
 
+/// The true air of a document with a `medium` (a problem or a fit result:
+/// `--truth`'s file, `path` naming it), validated; errors name
+/// `medium.…` in it.
+pub fn truth_of(text: &str, path: &std::path::Path) -> Result<Medium> {
+    let file: MediumOnly = parse_json(text, path, "truth")?;
+    file.medium
+        .validate()
+        .map_err(|e| e.within("medium").in_file(path))?;
+    Ok(file.medium)
+}
+
 /// Runs the ensemble, writes its outputs, prints the summary.
 pub fn run(o: &EnsembleOptions) -> Result<EnsembleReport> {
     let problem = Problem::load(&o.problem)?;
-    if problem.photo.is_some() {
-        return Err(crate::error::Error::input(
-            &o.problem,
-            "photo",
-            "an ensemble of a photo problem (marks resampled in pixels) is not built yet",
-        ));
-    }
-    if problem.free.is_empty() {
-        return Err(crate::error::Error::input(
-            &o.problem,
-            "free",
-            "empty: an ensemble refits the free parameters, and this problem has none",
-        ));
-    }
-    if 2 * problem.pairs.len() <= problem.free.len() {
-        return Err(crate::error::Error::input(
-            &o.problem,
-            "pairs",
-            format!(
-                "{} pair(s) give {} residual components, not more than the {} free parameters: nothing to resample",
-                problem.pairs.len(),
-                2 * problem.pairs.len(),
-                problem.free.len()
-            ),
-        ));
-    }
+    crate::fit::ensemble::check_problem(&problem)?;
     let truth = match &o.truth {
         None => None,
-        Some(path) => {
-            let file: MediumOnly = parse_json(&read_input(path)?, path, "truth")?;
-            file.medium
-                .validate()
-                .map_err(|e| e.within("medium").in_file(path))?;
-            Some(file.medium)
-        }
+        Some(path) => Some(truth_of(&read_input(path)?, path)?),
     };
     let mut inputs = vec![o.problem.as_path()];
     if let Some(t) = &o.truth {

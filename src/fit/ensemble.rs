@@ -40,11 +40,11 @@ use super::report::FitReport;
 use super::solve;
 use crate::error::Result;
 use crate::math::{SplitMix64, V3};
-use crate::medium::Medium;
-use crate::problem::{Problem, SolverMethod};
+use crate::medium::{Medium, Param};
+use crate::problem::{Problem, ProblemFile, Residual, SolverMethod};
 use crate::profile::{air_profile, default_at, default_top};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The percentiles reported (per cent).
 pub const PERCENTILES: [f64; 5] = [2.5, 16.0, 50.0, 84.0, 97.5];
@@ -224,162 +224,443 @@ fn best_fit(problem: &Problem) -> Result<(Problem, FitReport)> {
 }
 
 /// Runs the ensemble of `problem` (see the module doc); `truth`, when
-/// given, is drawn beside the envelopes.
+/// given, is drawn beside the envelopes. [`EnsemblePlan::new`], then every
+/// member ([`EnsemblePlan::members`]) on all threads, then
+/// [`EnsemblePlan::summarise`].
 pub fn ensemble(
     problem: &Problem,
     settings: &EnsembleSettings,
     truth: Option<&Medium>,
 ) -> Result<EnsembleReport> {
     let started = std::time::Instant::now();
-    let (base, best) = best_fit(problem)?;
-    let x_best: Vec<f64> = best.parameters.iter().map(|p| p.value).collect();
-    let mut fitted = base.clone();
-    fitted.medium = best.medium.clone();
+    let plan = EnsemblePlan::new(problem, settings, truth)?;
+    let members = plan.members(0..settings.members)?;
+    plan.summarise(members, started.elapsed().as_secs_f64())
+}
+
+/// Where σ came from, as [`Resampling::noise_from`] names it.
+const NOISE_FROM: [&str; 3] = ["given", "pairs", "fit"];
+
+/// An ensemble made ready to run: the best fit, the noise, and the problem
+/// the members fit. Its members are independent tasks: [`EnsemblePlan::member`]
+/// `(k)` depends on the plan and k alone, so they may run in any order, on
+/// any thread or machine (a plan travels as JSON:
+/// [`EnsemblePlan::to_json`], [`EnsemblePlan::from_json`]), and
+/// [`EnsemblePlan::summarise`] of members 0..N is what [`ensemble`] returns.
+#[derive(Clone, Debug)]
+pub struct EnsemblePlan {
+    settings: EnsembleSettings,
+    /// The problem's name and residual, as given.
+    name: String,
+    residual: Residual,
+    /// The problem the members fit: the (grown) problem at the best fit,
+    /// Levenberg–Marquardt converged fully.
+    fitted: Problem,
+    /// The best fit's parameters (names, values), F and medium.
+    names: Vec<String>,
+    x_best: Vec<f64>,
+    objective: f64,
+    medium: Medium,
+    /// Per pair: where the best fit puts its ray; `None` where it never
+    /// meets its plane.
+    endpoints: Vec<Option<[f64; 3]>>,
+    /// Per pair: its targets' σ (residual units over its weight).
+    sigma: Vec<f64>,
+    /// Per parameter: the linearised standard error at the ensemble's noise.
+    linearised: Vec<Option<f64>>,
+    /// The common σ (residual units) and where it came from.
+    common: f64,
+    noise_from: &'static str,
+    truth: Option<Medium>,
+}
+
+/// An [`EnsemblePlan`] as JSON: the problem document and everything the best
+/// fit found, so a plan is re-created without fitting again.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanFile {
+    /// The problem as its file holds it, and the path that names it.
+    problem: ProblemFile,
+    path: std::path::PathBuf,
+    members: usize,
+    noise: Option<f64>,
+    bootstrap: bool,
+    seed: u64,
+    truth: Option<Medium>,
+    /// The model the members fit (the grown one's terms where the problem
+    /// grows): its free parameters and bounds (`null`: unbounded).
+    free: Vec<String>,
+    bounds: Vec<[Option<f64>; 2]>,
+    /// The best fit.
+    medium: Medium,
+    objective: f64,
+    parameters: Vec<PlanParameter>,
+    endpoints: Vec<Option<[f64; 3]>>,
+    sigma: Vec<f64>,
+    noise_used: f64,
+    noise_from: String,
+}
+
+/// A parameter of a [`PlanFile`]: the best fit's value and linearised error.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanParameter {
+    name: String,
+    value: f64,
+    standard_error: Option<f64>,
+}
+
+impl EnsemblePlan {
+    /// Fits `problem` (grown first if its solver grows) and derives each
+    /// pair's σ and the linearised errors (steps 1 and 2 of the module doc,
+    /// up to the members). `truth`, when given, is drawn beside the
+    /// envelopes.
+    pub fn new(
+        problem: &Problem,
+        settings: &EnsembleSettings,
+        truth: Option<&Medium>,
+    ) -> Result<Self> {
+        let (base, best) = best_fit(problem)?;
+        let x_best: Vec<f64> = best.parameters.iter().map(|p| p.value).collect();
+        let mut fitted = base;
+        fitted.medium = best.medium.clone();
+        converge_fully(&mut fitted);
+        let m = fitted.pairs.len();
+        let p = x_best.len();
+
+        // σ in the residual's unit, per pair.
+        let residual_scale = {
+            let dof = (2 * m).saturating_sub(p).max(1) as f64;
+            (2.0 * best.totals.objective / dof).sqrt()
+        };
+        let (common, noise_from) = match settings.noise {
+            Some(s) => (problem.residual.noise_in_residual_units(s), NOISE_FROM[0]),
+            None if fitted.pair_noise.iter().any(Option::is_some) => {
+                (residual_scale, NOISE_FROM[1])
+            }
+            None => (residual_scale, NOISE_FROM[2]),
+        };
+        // Per pair: the residual's noise (residual units), and the targets'.
+        let residual_sigma: Vec<f64> = (0..m)
+            .map(|i| match (settings.noise, fitted.pair_noise[i]) {
+                (None, Some(own)) => problem.residual.noise_in_residual_units(own),
+                _ => common,
+            })
+            .collect();
+        let sigma: Vec<f64> = (0..m)
+            .map(|i| residual_sigma[i] / fitted.pairs[i].weight)
+            .collect();
+        let linearised = linearised_errors(&fitted, &x_best, &residual_sigma);
+        // An occluded ray still has its residual (traced through the
+        // ground); only a ray that never meets its plane has none to perturb.
+        let endpoints = best
+            .pairs
+            .iter()
+            .map(|r| (!r.unreachable).then_some(r.endpoint))
+            .collect();
+        Ok(EnsemblePlan {
+            settings: *settings,
+            name: problem.name.clone(),
+            residual: problem.residual,
+            fitted,
+            names: best.parameters.iter().map(|p| p.name.clone()).collect(),
+            x_best,
+            objective: best.totals.objective,
+            medium: best.medium,
+            endpoints,
+            sigma,
+            linearised,
+            common,
+            noise_from,
+            truth: truth.cloned(),
+        })
+    }
+
+    /// The settings it was made with.
+    pub fn settings(&self) -> &EnsembleSettings {
+        &self.settings
+    }
+
+    /// Member k: the fit to the k-th resampled observations (step 2 of the
+    /// module doc), seeded by the ensemble's seed and k alone. Runs on the
+    /// current rayon pool; its result does not depend on the pool's size.
+    pub fn member(&self, k: usize) -> Result<Member> {
+        crate::interrupt::check()?;
+        let fitted = &self.fitted;
+        let m = fitted.pairs.len();
+        let mut rng = member_rng(self.settings.seed, k);
+        let mut mp = fitted.clone();
+        if self.settings.bootstrap {
+            let picks: Vec<usize> = (0..m)
+                .map(|_| ((rng.next_f64() * m as f64) as usize).min(m - 1))
+                .collect();
+            mp.pairs = picks.iter().map(|&i| fitted.pairs[i]).collect();
+            mp.pair_noise = picks.iter().map(|&i| fitted.pair_noise[i]).collect();
+        } else {
+            let earth = fitted.trace.earth;
+            for (i, pair) in mp.pairs.iter_mut().enumerate() {
+                let (g1, g2) = (gaussian(&mut rng), gaussian(&mut rng));
+                let Some(endpoint) = self.endpoints[i] else {
+                    continue;
+                };
+                let normal = fitted.pairs[i].plane_on(earth).normal;
+                let (u, v) = plane_basis(normal);
+                let t = V3::from(endpoint) + (u * g1 + v * g2) * self.sigma[i];
+                pair.target = t.to_array();
+            }
+        }
+        let objective = Objective::from_problem(&mp);
+        let solution = solve::solve(&objective, &mp.solver, &mp.bounds, 0.0, None)?;
+        Ok(Member {
+            params: solution.x,
+            objective: solution.objective,
+        })
+    }
+
+    /// Members `ks`, on the current rayon pool's threads, in the order of
+    /// `ks`.
+    pub fn members(&self, ks: std::ops::Range<usize>) -> Result<Vec<Member>> {
+        let members: Vec<Result<Member>> = ks.into_par_iter().map(|k| self.member(k)).collect();
+        crate::interrupt::check()?;
+        members.into_iter().collect()
+    }
+
+    /// The report of members 0..N (steps 3 and 4 of the module doc), in
+    /// that order, however they were run; `wall_time_s` is reported as the
+    /// ensemble's wall-clock time. Fails, naming `members`, unless there
+    /// are [`EnsembleSettings::members`] of them, each with the plan's
+    /// number of parameters.
+    pub fn summarise(&self, members: Vec<Member>, wall_time_s: f64) -> Result<EnsembleReport> {
+        if members.len() != self.settings.members {
+            return Err(crate::error::Error::usage(
+                "members",
+                format!(
+                    "the plan has {} members, got {}",
+                    self.settings.members,
+                    members.len()
+                ),
+            ));
+        }
+        if let Some(k) = members
+            .iter()
+            .position(|mm| mm.params.len() != self.x_best.len())
+        {
+            return Err(crate::error::Error::usage(
+                "members",
+                format!(
+                    "member {k} has {} parameters, the plan {}",
+                    members[k].params.len(),
+                    self.x_best.len()
+                ),
+            ));
+        }
+        let parameters = self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(j, name)| self.spread(j, name, &members))
+            .collect();
+        let profiles = profiles_of(
+            &self.fitted,
+            &self.medium,
+            &members,
+            &self.x_best,
+            self.truth.as_ref(),
+        );
+        let settings = &self.settings;
+        let resampling = if settings.bootstrap {
+            Resampling {
+                kind: "bootstrap",
+                noise: None,
+                noise_from: None,
+                seed: settings.seed,
+            }
+        } else {
+            let shown = match self.residual {
+                Residual::Distance => self.common,
+                Residual::Angle => self.common * crate::sightline::ARCSEC_PER_RADIAN,
+            };
+            Resampling {
+                kind: "parametric",
+                noise: Some(shown),
+                noise_from: Some(self.noise_from),
+                seed: settings.seed,
+            }
+        };
+        Ok(EnsembleReport {
+            problem: self.name.clone(),
+            resampling,
+            objective: self.objective,
+            parameters,
+            members,
+            profiles,
+            medium: self.medium.clone(),
+            wall_time_s,
+        })
+    }
+
+    /// Parameter j across the members (step 3 of the module doc).
+    fn spread(&self, j: usize, name: &str, members: &[Member]) -> ParamSpread {
+        let best = self.x_best[j];
+        let mut values: Vec<f64> = members.iter().map(|mm| mm.params[j]).collect();
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        let std = var.sqrt();
+        let percentiles = percentiles_of(&mut values);
+        let disagreement = self.linearised[j].and_then(|se| {
+            if se.is_nan() || se <= 0.0 || members.len() < 10 {
+                return None;
+            }
+            let ratio = std / se;
+            let shift = (percentiles[2] - best).abs() / se;
+            if !(1.0 / 1.5..=1.5).contains(&ratio) {
+                Some(format!(
+                    "the ensemble's spread is {ratio:.2} × the linearised standard error: the residuals are not linear in it over the noise"
+                ))
+            } else if shift > 0.5 {
+                Some(format!(
+                    "the ensemble's median lies {shift:.2} standard errors from the best fit: its distribution is skewed"
+                ))
+            } else {
+                None
+            }
+        });
+        ParamSpread {
+            name: name.to_string(),
+            best,
+            standard_error: self.linearised[j],
+            mean,
+            std,
+            percentiles,
+            disagreement,
+        }
+    }
+
+    /// The plan as JSON text, for [`EnsemblePlan::from_json`] elsewhere
+    /// (another process or machine). `file` must be the document the
+    /// plan's problem was read from ([`Problem::from_file`]'s): the plan
+    /// keeps the best fit, not the problem's pairs.
+    pub fn to_json(&self, file: &ProblemFile) -> Result<String> {
+        let plan = PlanFile {
+            problem: file.clone(),
+            path: self.fitted.source.clone(),
+            members: self.settings.members,
+            noise: self.settings.noise,
+            bootstrap: self.settings.bootstrap,
+            seed: self.settings.seed,
+            truth: self.truth.clone(),
+            free: self.fitted.free.iter().map(|p| p.to_string()).collect(),
+            bounds: self
+                .fitted
+                .bounds
+                .iter()
+                .map(|&(lo, hi)| [lo.is_finite().then_some(lo), hi.is_finite().then_some(hi)])
+                .collect(),
+            medium: self.medium.clone(),
+            objective: self.objective,
+            parameters: (0..self.names.len())
+                .map(|j| PlanParameter {
+                    name: self.names[j].clone(),
+                    value: self.x_best[j],
+                    standard_error: self.linearised[j],
+                })
+                .collect(),
+            endpoints: self.endpoints.clone(),
+            sigma: self.sigma.clone(),
+            noise_used: self.common,
+            noise_from: self.noise_from.to_string(),
+        };
+        serde_json::to_string(&plan).map_err(|e| crate::error::Error::encode("the plan", e))
+    }
+
+    /// The plan that [`EnsemblePlan::to_json`] wrote: the problem parsed
+    /// again, its model set to the best fit, nothing fitted. Its members
+    /// equal the original plan's bit for bit. Errors name the plan's field
+    /// (in the file `<plan>`).
+    pub fn from_json(text: &str) -> Result<Self> {
+        let here = std::path::Path::new("<plan>");
+        let bad = |field: &str, message: String| crate::error::Error::input(here, field, message);
+        let f: PlanFile = crate::io::json::parse_json(text, here, "plan")?;
+        let problem = Problem::from_file(f.problem, &f.path)?;
+        check_members(f.members).map_err(|e| bad("members", e.to_string()))?;
+        let mut fitted = problem.clone();
+        fitted.free = f
+            .free
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                name.parse::<Param>()
+                    .map_err(|e| bad(&format!("free[{i}]"), e.to_string()))
+            })
+            .collect::<Result<_>>()?;
+        fitted.bounds = f
+            .bounds
+            .iter()
+            .map(|[lo, hi]| (lo.unwrap_or(f64::NEG_INFINITY), hi.unwrap_or(f64::INFINITY)))
+            .collect();
+        f.medium
+            .validate()
+            .map_err(|e| e.within("medium").in_file(here))?;
+        if let Some(t) = &f.truth {
+            t.validate().map_err(|e| e.within("truth").in_file(here))?;
+        }
+        fitted.medium = f.medium.clone();
+        converge_fully(&mut fitted);
+        let (m, p) = (fitted.pairs.len(), fitted.free.len());
+        for (field, len, want) in [
+            ("bounds", fitted.bounds.len(), p),
+            ("parameters", f.parameters.len(), p),
+            ("endpoints", f.endpoints.len(), m),
+            ("sigma", f.sigma.len(), m),
+        ] {
+            if len != want {
+                return Err(bad(field, format!("has {len} entries, the problem {want}")));
+            }
+        }
+        let noise_from = NOISE_FROM
+            .into_iter()
+            .find(|n| *n == f.noise_from)
+            .ok_or_else(|| {
+                bad(
+                    "noise_from",
+                    format!("must be `given`, `pairs` or `fit`, got `{}`", f.noise_from),
+                )
+            })?;
+        Ok(EnsemblePlan {
+            settings: EnsembleSettings {
+                members: f.members,
+                noise: f.noise,
+                bootstrap: f.bootstrap,
+                seed: f.seed,
+            },
+            name: problem.name,
+            residual: problem.residual,
+            fitted,
+            names: f.parameters.iter().map(|q| q.name.clone()).collect(),
+            x_best: f.parameters.iter().map(|q| q.value).collect(),
+            objective: f.objective,
+            medium: f.medium,
+            endpoints: f.endpoints,
+            sigma: f.sigma,
+            linearised: f.parameters.iter().map(|q| q.standard_error).collect(),
+            common: f.noise_used,
+            noise_from,
+            truth: f.truth,
+        })
+    }
+}
+
+/// The members' solver: Levenberg–Marquardt, converged fully. Stopping
+/// early would keep them near x̂ and shrink the spread (at the default
+/// tolerances the ensemble came out 7 % narrower than the linearised
+/// errors).
+fn converge_fully(fitted: &mut Problem) {
     fitted.solver.method = SolverMethod::Lm;
-    // Members converge fully: stopping early would keep them near x̂ and
-    // shrink the spread (at the default tolerances the ensemble came out
-    // 7 % narrower than the linearised errors).
     fitted.solver.ftol = fitted.solver.ftol.min(1e-15);
     fitted.solver.xtol = fitted.solver.xtol.min(1e-15);
     fitted.solver.gtol = fitted.solver.gtol.min(1e-15);
     fitted.solver.grow = None;
-    let m = fitted.pairs.len();
-    let p = x_best.len();
-
-    // σ in the residual's unit, per pair.
-    let residual_scale = {
-        let dof = (2 * m).saturating_sub(p).max(1) as f64;
-        (2.0 * best.totals.objective / dof).sqrt()
-    };
-    let (common, noise_from) = match settings.noise {
-        Some(s) => (problem.residual.noise_in_residual_units(s), "given"),
-        None if fitted.pair_noise.iter().any(Option::is_some) => (residual_scale, "pairs"),
-        None => (residual_scale, "fit"),
-    };
-    // Per pair: the residual's noise (residual units), and the targets'.
-    let residual_sigma: Vec<f64> = (0..m)
-        .map(|i| match (settings.noise, fitted.pair_noise[i]) {
-            (None, Some(own)) => problem.residual.noise_in_residual_units(own),
-            _ => common,
-        })
-        .collect();
-    let sigma: Vec<f64> = (0..m)
-        .map(|i| residual_sigma[i] / fitted.pairs[i].weight)
-        .collect();
-    let linearised = linearised_errors(&fitted, &x_best, &residual_sigma);
-    let earth = fitted.trace.earth;
-
-    let members: Vec<Result<Member>> = (0..settings.members)
-        .into_par_iter()
-        .map(|k| {
-            crate::interrupt::check()?;
-            let mut rng = member_rng(settings.seed, k);
-            let mut mp = fitted.clone();
-            if settings.bootstrap {
-                let picks: Vec<usize> = (0..m)
-                    .map(|_| ((rng.next_f64() * m as f64) as usize).min(m - 1))
-                    .collect();
-                mp.pairs = picks.iter().map(|&i| fitted.pairs[i]).collect();
-                mp.pair_noise = picks.iter().map(|&i| fitted.pair_noise[i]).collect();
-            } else {
-                for (i, pair) in mp.pairs.iter_mut().enumerate() {
-                    let (g1, g2) = (gaussian(&mut rng), gaussian(&mut rng));
-                    let r = &best.pairs[i];
-                    // An occluded ray still has its residual (traced through
-                    // the ground); only a ray that never meets its plane has
-                    // none to perturb.
-                    if r.unreachable {
-                        continue;
-                    }
-                    let normal = fitted.pairs[i].plane_on(earth).normal;
-                    let (u, v) = plane_basis(normal);
-                    let e = V3::from(r.endpoint);
-                    let t = e + (u * g1 + v * g2) * sigma[i];
-                    pair.target = t.to_array();
-                }
-            }
-            let objective = Objective::from_problem(&mp);
-            let solution = solve::solve(&objective, &mp.solver, &mp.bounds, 0.0, None)?;
-            Ok(Member {
-                params: solution.x,
-                objective: solution.objective,
-            })
-        })
-        .collect();
-    crate::interrupt::check()?;
-    let members: Vec<Member> = members.into_iter().collect::<Result<_>>()?;
-
-    let parameters = best
-        .parameters
-        .iter()
-        .enumerate()
-        .map(|(j, bp)| {
-            let mut values: Vec<f64> = members.iter().map(|mm| mm.params[j]).collect();
-            let n = values.len() as f64;
-            let mean = values.iter().sum::<f64>() / n;
-            let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-            let std = var.sqrt();
-            let percentiles = percentiles_of(&mut values);
-            let disagreement = linearised[j].and_then(|se| {
-                if se.is_nan() || se <= 0.0 || members.len() < 10 {
-                    return None;
-                }
-                let ratio = std / se;
-                let shift = (percentiles[2] - bp.value).abs() / se;
-                if !(1.0 / 1.5..=1.5).contains(&ratio) {
-                    Some(format!(
-                        "the ensemble's spread is {ratio:.2} × the linearised standard error: the residuals are not linear in it over the noise"
-                    ))
-                } else if shift > 0.5 {
-                    Some(format!(
-                        "the ensemble's median lies {shift:.2} standard errors from the best fit: its distribution is skewed"
-                    ))
-                } else {
-                    None
-                }
-            });
-            ParamSpread {
-                name: bp.name.clone(),
-                best: bp.value,
-                standard_error: linearised[j],
-                mean,
-                std,
-                percentiles,
-                disagreement,
-            }
-        })
-        .collect();
-
-    let profiles = profiles_of(&fitted, &best.medium, &members, &x_best, truth);
-    let resampling = if settings.bootstrap {
-        Resampling {
-            kind: "bootstrap",
-            noise: None,
-            noise_from: None,
-            seed: settings.seed,
-        }
-    } else {
-        let shown = match problem.residual {
-            crate::problem::Residual::Distance => common,
-            crate::problem::Residual::Angle => common * crate::sightline::ARCSEC_PER_RADIAN,
-        };
-        Resampling {
-            kind: "parametric",
-            noise: Some(shown),
-            noise_from: Some(noise_from),
-            seed: settings.seed,
-        }
-    };
-    Ok(EnsembleReport {
-        problem: problem.name.clone(),
-        resampling,
-        objective: best.totals.objective,
-        parameters,
-        members,
-        profiles,
-        medium: best.medium,
-        wall_time_s: started.elapsed().as_secs_f64(),
-    })
 }
 
 /// The linearised standard errors at the ensemble's noise: the square roots
@@ -504,6 +785,39 @@ fn profiles_of(
             truth: truth.map(|t| t.1),
         },
     }
+}
+
+/// Checks, before any work, that `problem` has something to resample: free
+/// parameters, and more residual components (two per pair) than them.
+/// Errors name the field (`free`, `pairs`) in the problem's file.
+pub fn check_problem(problem: &Problem) -> Result<()> {
+    if problem.photo.is_some() {
+        return Err(crate::error::Error::input(
+            &problem.source,
+            "photo",
+            "an ensemble of a photo problem (marks resampled in pixels) is not built yet",
+        ));
+    }
+    if problem.free.is_empty() {
+        return Err(crate::error::Error::input(
+            &problem.source,
+            "free",
+            "empty: an ensemble refits the free parameters, and this problem has none",
+        ));
+    }
+    if 2 * problem.pairs.len() <= problem.free.len() {
+        return Err(crate::error::Error::input(
+            &problem.source,
+            "pairs",
+            format!(
+                "{} pair(s) give {} residual components, not more than the {} free parameters: nothing to resample",
+                problem.pairs.len(),
+                2 * problem.pairs.len(),
+                problem.free.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Checks an ensemble's settings before any work: at least one member.

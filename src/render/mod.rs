@@ -792,6 +792,15 @@ fn hit_fraction(s: &str) -> std::result::Result<f64, crate::error::ValueError> {
     }
 }
 
+/// How `mirage render` tone-maps its PNG: shaded images by the scene's
+/// `exposure` and the filmic curve, albedo images clamped.
+pub fn tone_map(shading: Shading, exposure: f64) -> output::ToneMap {
+    match shading {
+        Shading::Lit => output::ToneMap::Filmic { exposure },
+        Shading::Albedo => output::ToneMap::Clamp,
+    }
+}
+
 /// `mirage render`: loads the scene, renders it and writes the PNG (and the
 /// EXR), atomically; prints a one-paragraph summary unless quiet.
 pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
@@ -832,12 +841,7 @@ pub fn render_command(o: &CommandOptions) -> Result<Rendered> {
     let image = renderer.render();
     // The last cancellation point: once writing starts, it finishes.
     crate::interrupt::check()?;
-    let tone = match options.shading {
-        Shading::Lit => output::ToneMap::Filmic {
-            exposure: scene.exposure,
-        },
-        Shading::Albedo => output::ToneMap::Clamp,
-    };
+    let tone = tone_map(options.shading, scene.exposure);
     let png = output::encode_png(image.width, image.height, &image.pixels, tone)?;
     let exr = match &o.exr {
         Some(_) => Some(output::encode_exr(

@@ -121,17 +121,10 @@ impl Quantizer {
     }
 }
 
-/// PNG bytes of a linear RGB image (row-major, top row first).
-pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -> Result<Vec<u8>> {
-    use image::ImageEncoder;
-    use image::codecs::png::PngEncoder;
+/// The 8-bit sRGB values of linear RGB pixels, three per pixel in their
+/// order: what [`encode_png`] writes.
+pub fn to_srgb8(pixels: &[[f32; 3]], tone: ToneMap) -> Vec<u8> {
     use rayon::prelude::*;
-    if pixels.len() != width as usize * height as usize {
-        return Err(Error::encode(
-            "the PNG",
-            "the image buffer has the wrong size",
-        ));
-    }
     // On all threads, the same bytes in any order.
     let quantizer = Quantizer::new(tone);
     let mut raw = vec![0u8; pixels.len() * 3];
@@ -142,6 +135,20 @@ pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -
                 out[k] = quantizer.apply(p[k]);
             }
         });
+    raw
+}
+
+/// PNG bytes of a linear RGB image (row-major, top row first).
+pub fn encode_png(width: u32, height: u32, pixels: &[[f32; 3]], tone: ToneMap) -> Result<Vec<u8>> {
+    use image::ImageEncoder;
+    use image::codecs::png::PngEncoder;
+    if pixels.len() != width as usize * height as usize {
+        return Err(Error::encode(
+            "the PNG",
+            "the image buffer has the wrong size",
+        ));
+    }
+    let raw = to_srgb8(pixels, tone);
     let mut bytes = Vec::new();
     PngEncoder::new(&mut bytes)
         .write_image(&raw, width, height, image::ExtendedColorType::Rgb8)
