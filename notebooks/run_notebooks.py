@@ -20,7 +20,8 @@ import nbformat
 from nbclient import NotebookClient
 
 HERE = Path(__file__).resolve().parent
-NOTEBOOKS = ["fit_walkthrough.ipynb", "tradeoff.ipynb", "validation.ipynb", "python_api.ipynb"]
+NOTEBOOKS = ["fit_walkthrough.ipynb", "tradeoff.ipynb", "validation.ipynb", "python_api.ipynb",
+             "ensemble.ipynb"]
 
 
 def main(argv: list[str]) -> int:

@@ -6,11 +6,12 @@ mod common;
 
 use std::process::Command;
 
-const NOTEBOOKS: [&str; 4] = [
+const NOTEBOOKS: [&str; 5] = [
     "fit_walkthrough.ipynb",
     "tradeoff.ipynb",
     "validation.ipynb",
     "python_api.ipynb",
+    "ensemble.ipynb",
 ];
 
 #[test]
@@ -69,8 +70,11 @@ fn notebooks_execute() {
     for name in NOTEBOOKS {
         assert!(stdout.contains(&format!("{name}: executed")), "{stdout}");
     }
-    // What the notebooks made is there (a fit result, a Pareto plot, the validation table).
+    // What the notebooks made is there (a fit result, a Pareto plot, the
+    // validation table, the ensemble's bands and the hot road's video).
     assert!(out.path().join("fit.json").exists());
     assert!(out.path().join("pareto.png").exists());
     assert!(out.path().join("validation/results.json").exists());
+    assert!(out.path().join("ensemble-bands.png").exists());
+    assert!(out.path().join("hot-road.mp4").exists());
 }

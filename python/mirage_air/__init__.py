@@ -463,27 +463,41 @@ def _whole(name: str, value: Any, low: int, high: Optional[int] = None, what: st
     return v
 
 
-def _executor_of(executor: Any) -> Optional[concurrent.futures.Executor]:
-    """``None``, a ``concurrent.futures.Executor``, or a Dask ``Client`` (its
-    ``get_executor()``): where tasks go."""
-    if executor is None or isinstance(executor, concurrent.futures.Executor):
-        return executor
-    get = getattr(executor, "get_executor", None)
-    if callable(get):
-        return get()
+def _is_dask_client(executor: Any) -> bool:
+    """Whether ``executor`` is a Dask ``Client`` (by its interface)."""
+    return not isinstance(executor, concurrent.futures.Executor) and all(
+        callable(getattr(executor, name, None)) for name in ("map", "gather", "cancel", "get_executor"))
+
+
+def _check_executor(executor: Any) -> None:
+    """``None``, a ``concurrent.futures.Executor`` or a Dask ``Client``, or
+    an error naming ``executor``."""
+    if executor is None or isinstance(executor, concurrent.futures.Executor) or _is_dask_client(executor):
+        return
     raise _argument_error(
         "executor",
         f"must be None, a concurrent.futures.Executor or a dask.distributed.Client, got {type(executor).__name__}",
     )
 
 
-def _gather(futures: List["concurrent.futures.Future[Any]"]) -> List[Any]:
-    """The futures' results in their order; on the first failure the rest
-    are cancelled and the failure raised."""
+def _run_tasks(executor: Any, fn: Any, tasks: List[Tuple[Any, ...]]) -> List[Any]:
+    """``fn(*args)`` for each ``args`` of ``tasks``, one task each on
+    ``executor`` (a ``concurrent.futures.Executor`` or a Dask ``Client``:
+    ``client.map``, whose batched submission costs the scheduler less than
+    one ``submit`` a task); the results in the tasks' order. On the first
+    failure the other tasks are cancelled and the failure raised."""
+    if _is_dask_client(executor):
+        futures = executor.map(fn, *zip(*tasks)) if tasks else []
+        try:
+            return list(executor.gather(futures))
+        except BaseException:
+            executor.cancel(futures)
+            raise
+    pending = [executor.submit(fn, *args) for args in tasks]
     try:
-        return [f.result() for f in futures]
+        return [f.result() for f in pending]
     except BaseException:
-        for f in futures:
+        for f in pending:
             f.cancel()
         raise
 
@@ -664,14 +678,14 @@ def ensemble(
     if threads is not None:
         threads = _whole("threads", threads, 1)
     truth_text, truth_path = _truth_of(truth)
-    pool = _executor_of(executor)
-    if pool is None:
+    _check_executor(executor)
+    if executor is None:
         return EnsembleResult._of(_native.ensemble(
             p._text, p.path, n, noise, bool(bootstrap), seed, truth_text, truth_path, threads))
     started = time.perf_counter()
     plan = _native.ensemble_plan(p._text, p.path, n, noise, bool(bootstrap), seed, truth_text, truth_path)
     per_task = 1 if threads is None else threads
-    members = _gather([pool.submit(_ensemble_member, plan, k, per_task) for k in range(n)])
+    members = _run_tasks(executor, _ensemble_member, [(plan, k, per_task) for k in range(n)])
     return EnsembleResult._of(_native.ensemble_summarise(plan, members, time.perf_counter() - started))
 
 
@@ -717,12 +731,12 @@ def render_frames(
     _native.render_check(width, height, spp)
     if threads is not None:
         threads = _whole("threads", threads, 1)
-    pool = _executor_of(executor)
+    _check_executor(executor)
     args = (width, height, spp, bool(albedo), bool(straight))
-    if pool is None:
+    if executor is None:
         return [_render_frame(s._text, s.path, *args, threads, bool(srgb)) for s in docs]
     per_task = 1 if threads is None else threads
-    return _gather([pool.submit(_render_frame, s._text, s.path, *args, per_task, bool(srgb)) for s in docs])
+    return _run_tasks(executor, _render_frame, [(s._text, s.path, *args, per_task, bool(srgb)) for s in docs])
 
 
 #: How to get :func:`write_video`'s optional dependencies.
