@@ -11,6 +11,7 @@
 use super::camera::{CameraParam, CameraParams, FocalSource};
 use crate::error::FieldError;
 use crate::geo::{Horizon, Point, Site};
+use crate::validate::finite;
 use serde::{Deserialize, Serialize};
 
 /// The `photo` section.
@@ -130,17 +131,6 @@ pub struct PhotoSetup {
 
 /// The default `horizon_range` (m).
 pub const DEFAULT_HORIZON_RANGE: f64 = 100_000.0;
-
-fn finite(field: &str, v: f64) -> Result<f64, FieldError> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(FieldError::new(
-            field,
-            format!("must be a finite number, got {v}"),
-        ))
-    }
-}
 
 /// What the image tells: its size and, when its EXIF has one, the focal
 /// length in pixels with words on its source.
