@@ -663,7 +663,6 @@ class EnsembleResult:
             wall_time_s=float(r["wall_time_s"]),
             report=r,
             _json=text + "\n",
-            photo=r.get("photo"),
         )
 
 
