@@ -218,7 +218,8 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;
     }
     if let (Some(path), Some(photo)) = (&options.overlay, &report.photo) {
-        super::overlay::write_overlay(&problem, photo, &format!("{}: fitted", problem.name), path)?;
+        let title = super::overlay::overlay_title(&problem, true);
+        super::overlay::write_overlay(&problem, photo, &title, path)?;
     }
     print!("{}", fit_summary(&problem, &report));
     let sv = &report.solver;

@@ -172,7 +172,7 @@ pub struct CameraParams {
 }
 
 /// A camera evaluated in numbers `T` (see the module doc).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera<T = f64> {
     /// Focal length (pixels).
     pub f: T,
