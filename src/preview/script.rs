@@ -119,6 +119,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<(usize, Step)>> {
 /// Frames a `button` step waits for its widget.
 const WIDGET_PATIENCE: u32 = 120;
 
+/// Frames with no input after a step's last event, so that the next step
+/// finds the layout that step made (a button that appeared after a click
+/// moves the ones below it: a `button` step read before the layout settled
+/// pressed whatever had taken the old place).
+const SETTLE_FRAMES: u32 = 3;
+
 /// Plays a script, a frame at a time.
 #[derive(Clone, Debug)]
 pub struct Player {
@@ -153,7 +159,7 @@ impl Player {
             self.wait -= 1;
             return Ok(Vec::new());
         }
-        if let Some(e) = self.queue.pop_front() {
+        if let Some(e) = self.next_event() {
             return Ok(vec![e]);
         }
         let Some((line, step)) = self.steps.pop_front() else {
@@ -209,7 +215,16 @@ impl Player {
                 return Ok(Vec::new());
             }
         }
-        Ok(self.queue.pop_front().into_iter().collect())
+        Ok(self.next_event().into_iter().collect())
+    }
+
+    /// The next queued event; after the last one, the frames to settle.
+    fn next_event(&mut self) -> Option<Event> {
+        let e = self.queue.pop_front()?;
+        if self.queue.is_empty() {
+            self.wait = SETTLE_FRAMES;
+        }
+        Some(e)
     }
 }
 
@@ -267,9 +282,13 @@ mod tests {
                 Event::Release([500.0, 40.0]),
             ]
         );
-        assert_eq!(events[6], Event::Move([11.0, 21.0]));
-        assert_eq!(events[11], Event::Move([19.0, 37.0]));
-        assert_eq!(events[12], Event::Release([19.0, 37.0]));
+        // The drag from photo (0, 0) to (4, 8): screen (10, 20) to (18, 36)
+        // in four moves.
+        assert_eq!(events[6], Event::Move([10.0, 20.0]), "{events:?}");
+        assert_eq!(events[7], Event::Press([10.0, 20.0]));
+        assert_eq!(events[8], Event::Move([12.0, 24.0]));
+        assert_eq!(events[11], Event::Move([18.0, 36.0]));
+        assert_eq!(events[12], Event::Release([18.0, 36.0]));
         assert_eq!(events[13], Event::Text("12.5".into()));
         assert_eq!(events.len(), 14);
         // The fit's three busy frames were waited out.
