@@ -338,7 +338,14 @@ fn the_photo_mode_is_marked_fitted_and_saved_by_a_script() {
     // The stroke is a few pixels wide and antialiased: some pixel within
     // two of the circle's point is its full yellow.
     let yellow = |c: [u8; 3]| c[0] > 200 && c[1] > 160 && c[2] < 90;
-    for (dx, dy) in [(-ring, 0.0), (0.0, ring), (ring * 0.7071, ring * 0.7071)] {
+    for (dx, dy) in [
+        (-ring, 0.0),
+        (0.0, ring),
+        (
+            ring * std::f64::consts::FRAC_1_SQRT_2,
+            ring * std::f64::consts::FRAC_1_SQRT_2,
+        ),
+    ] {
         let near: Vec<[u8; 3]> = (-2..=2)
             .flat_map(|i| (-2..=2).map(move |j| (i as f64, j as f64)))
             .map(|(i, j)| at(truth[6], dx + i, dy + j))
