@@ -259,6 +259,9 @@ fn fuzz_photo_ray_through_the_ground_has_a_finite_jacobian() {
         let x = objective.start();
         let (r, j) = objective.jacobian(x.as_slice());
         assert!(r.iter().all(|v| v.is_finite()), "{r:?}");
-        assert!(j.iter().all(|v| v.is_finite()), "max_steps {max_steps}: {j:?}");
+        assert!(
+            j.iter().all(|v| v.is_finite()),
+            "max_steps {max_steps}: {j:?}"
+        );
     }
 }
