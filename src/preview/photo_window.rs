@@ -29,7 +29,7 @@
 //!   exactly as the fit traces them.
 
 use super::display::read_png;
-use super::gpu::{Gpu, copy_to_buffer};
+use super::gpu::{Gpu, copy_to_buffer, surface_config};
 use super::photo::{NewTarget, PhotoFitJob, PhotoFrame, PhotoSession, typed_point};
 use super::script::{Event, Player, Stage};
 use crate::error::{Error, Result};
@@ -569,25 +569,9 @@ impl PhotoApp {
             .map_err(|e| Error::gpu("creating the window's surface", e))?;
         let gpu = Gpu::with_instance(instance, Some(&surface))?;
         let caps = surface.get_capabilities(&gpu.adapter);
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| !f.is_srgb())
-            .or_else(|| caps.formats.first().copied())
-            .ok_or_else(|| Error::gpu("configuring the surface", "it supports no format"))?;
         let size = window.inner_size();
-        let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes[0],
-            view_formats: vec![],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-        };
+        let config = surface_config(&caps, size.width, size.height)?;
+        let format = config.format;
         surface.configure(&gpu.device, &config);
         let egui_state = egui_winit::State::new(
             self.egui.clone(),
