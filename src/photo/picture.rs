@@ -321,15 +321,23 @@ mod tests {
     }
 
     fn jpeg_bytes(img: &RgbImage) -> Vec<u8> {
+        jpeg_with(img, 95, None)
+    }
+
+    /// A JPEG of `img` at `quality`, with `exif` (a TIFF block) when given.
+    fn jpeg_with(img: &RgbImage, quality: u8, exif: Option<Vec<u8>>) -> Vec<u8> {
         let mut out = Vec::new();
-        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95)
-            .write_image(
-                img.as_raw(),
-                img.width(),
-                img.height(),
-                ExtendedColorType::Rgb8,
-            )
-            .unwrap();
+        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality);
+        if let Some(tiff) = exif {
+            enc.set_exif_metadata(tiff).unwrap();
+        }
+        enc.write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            ExtendedColorType::Rgb8,
+        )
+        .unwrap();
         out
     }
 
@@ -360,17 +368,7 @@ mod tests {
         writer.push_field(&field);
         let mut tiff = Cursor::new(Vec::new());
         writer.write(&mut tiff, false).unwrap();
-        let mut out = Vec::new();
-        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 100);
-        enc.set_exif_metadata(tiff.into_inner()).unwrap();
-        enc.write_image(
-            img.as_raw(),
-            img.width(),
-            img.height(),
-            ExtendedColorType::Rgb8,
-        )
-        .unwrap();
-        out
+        jpeg_with(img, 100, Some(tiff.into_inner()))
     }
 
     #[test]
