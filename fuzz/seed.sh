@@ -160,7 +160,9 @@ for name, text, image in cases:
 PY
 for f in "$root"/problems/photo/*.json; do
     [ -e "$f" ] || continue
-    img=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["photo"]["image"])' "$f")
+    # Only photo problems (the folder also holds the example's scene and truth).
+    img=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1])).get("photo", {}).get("image", ""))' "$f")
+    [ -n "$img" ] || continue
     python3 - "$f" "$(dirname "$f")/$img" "$c/photo/bundled-$(basename "$f")" <<'PY'
 import json, sys
 p = json.load(open(sys.argv[1]))
