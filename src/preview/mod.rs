@@ -17,6 +17,7 @@
 //! nearer than the best distance so far).
 
 pub mod accumulate;
+pub mod backdrop;
 pub mod camera;
 mod command;
 pub mod display;

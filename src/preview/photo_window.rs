@@ -23,11 +23,16 @@
 //!   background thread (the window stays live) and shows the fitted camera
 //!   and air's predictions; **Save** writes the marks back into the file
 //!   (only its `marks`, atomically).
-//! - **Not drawn**: a GPU render of the air behind the photo. The photo is
-//!   the picture here; the render of the same air is `mirage preview` of a
-//!   scene, and the marks' predictions come from rays traced on the CPU
-//!   exactly as the fit traces them.
+//! - **The air behind the photo**: the "photo ↔ air" slider blends the
+//!   photo with a render of the problem's air and sea through the photo's
+//!   own camera at the current numbers ([`super::backdrop`]; the CPU
+//!   renderer on a background thread, [`BACKDROP_WIDTH`] pixels wide, made
+//!   when the slider first leaves the photo and again after each fit). At 0
+//!   only the photo shows, at 1 only the render; between, the photo is
+//!   drawn over the render with opacity 1 − blend. Over the round earth the
+//!   render's sea horizon is the air's apparent horizon, the pink line.
 
+use super::backdrop::{BACKDROP_WIDTH, BackdropJob};
 use super::display::read_png;
 use super::gpu::{Gpu, copy_to_buffer, surface_config};
 use super::photo::{NewTarget, PhotoFitJob, PhotoFrame, PhotoSession, typed_point};
@@ -114,6 +119,10 @@ pub fn run(
         selected: None,
         drag: None,
         fit: None,
+        backdrop: None,
+        backdrop_job: None,
+        backdrop_wanted: false,
+        blend: 0.0,
         message: String::new(),
         save_path,
         frames_drawn: 0,
@@ -169,6 +178,14 @@ struct PhotoApp {
     /// The mark being dragged and where it is now (photo pixels).
     drag: Option<(usize, [f64; 2])>,
     fit: Option<PhotoFitJob>,
+    /// The render of the air behind the photo, once made.
+    backdrop: Option<egui::TextureHandle>,
+    /// The render being made.
+    backdrop_job: Option<BackdropJob>,
+    /// Whether the render is out of date (a fit landed since).
+    backdrop_wanted: bool,
+    /// 0: the photo; 1: the render of the air.
+    blend: f32,
     message: String,
     save_path: String,
     /// Frames drawn so far.
@@ -179,13 +196,21 @@ impl Stage for PhotoApp {
     fn photo_to_screen(&self, p: [f64; 2]) -> Option<[f64; 2]> {
         self.frame.map(|f| f.to_screen(p))
     }
-    fn widget(&self, label: &str) -> Option<[f64; 2]> {
-        self.widgets
-            .get(label)
-            .map(|r| [r.center().x as f64, r.center().y as f64])
+    fn widget(&self, label: &str) -> Option<[f64; 4]> {
+        self.widgets.get(label).map(|r| {
+            [
+                r.min.x as f64,
+                r.min.y as f64,
+                r.max.x as f64,
+                r.max.y as f64,
+            ]
+        })
     }
     fn fitting(&self) -> bool {
         self.fit.is_some()
+    }
+    fn rendering(&self) -> bool {
+        self.backdrop_job.is_some() || (self.backdrop_wanted && self.blend > 0.0)
     }
 }
 
@@ -227,8 +252,9 @@ impl PhotoApp {
                 .map(|()| report)
         }) {
             Ok(report) => {
+                self.backdrop_wanted = true;
                 let mut s = format!(
-                    "fit: RMS residual {before:.4} → {:.4} px in {} iterations;",
+                    "fit: RMS residual from {before:.4} to {:.4} px in {} iterations;",
                     self.session.report.rms_pixels, state.iterations
                 );
                 for p in &report.parameters {
@@ -239,6 +265,44 @@ impl PhotoApp {
             Err(e) => format!("fit failed: {e}"),
         };
         eprintln!("{}", self.message);
+    }
+
+    /// Starts the render behind the photo when it is shown and out of
+    /// date; takes it once done.
+    fn poll_backdrop(&mut self, ctx: &egui::Context) {
+        if let Some(job) = &self.backdrop_job
+            && let Some(done) = job.take()
+        {
+            self.backdrop_job = None;
+            match done {
+                Ok(img) => {
+                    let color = egui::ColorImage::from_rgb(
+                        [img.width() as usize, img.height() as usize],
+                        img.as_raw(),
+                    );
+                    self.backdrop =
+                        Some(ctx.load_texture("air", color, egui::TextureOptions::LINEAR));
+                    eprintln!(
+                        "the air behind the photo: rendered at {} × {}",
+                        img.width(),
+                        img.height()
+                    );
+                }
+                Err(e) => {
+                    self.message = format!("the air behind the photo: {e}");
+                    eprintln!("{}", self.message);
+                }
+            }
+        }
+        let stale = self.backdrop.is_none() || self.backdrop_wanted;
+        if self.blend > 0.0 && stale && self.backdrop_job.is_none() && self.fit.is_none() {
+            self.backdrop_wanted = false;
+            self.backdrop_job = Some(BackdropJob::start(
+                &self.session.problem,
+                self.session.fitted.clone(),
+                BACKDROP_WIDTH,
+            ));
+        }
     }
 
     fn controls(&mut self, ui: &mut egui::Ui) {
@@ -290,6 +354,21 @@ impl PhotoApp {
                 self.report_edit("mark deleted", outcome);
             }
         }
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.label("photo");
+            let r = ui.add(
+                egui::Slider::new(&mut self.blend, 0.0..=1.0)
+                    .show_value(false)
+                    .trailing_fill(true),
+            );
+            self.widgets.insert("blend".into(), r.rect);
+            ui.label("air");
+            if self.backdrop_job.is_some() {
+                ui.spinner();
+                ui.label("rendering the air…");
+            }
+        });
         ui.separator();
         let fitting = self.fit.is_some();
         ui.horizontal(|ui| {
@@ -491,13 +570,17 @@ impl PhotoApp {
         };
         let image_rect =
             egui::Rect::from_min_max(corner([0.0, 0.0]), corner([size[0] as f64, size[1] as f64]));
+        let whole = egui::Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+        let behind = self.backdrop.as_ref().filter(|_| self.blend > 0.0);
+        if let Some(t) = behind {
+            painter.image(t.id(), image_rect, whole, Color32::WHITE);
+        }
         if let Some(t) = &self.texture {
-            painter.image(
-                t.id(),
-                image_rect,
-                egui::Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
-                Color32::WHITE,
-            );
+            let tint = match behind {
+                Some(_) => Color32::WHITE.gamma_multiply(1.0 - self.blend),
+                None => Color32::WHITE,
+            };
+            painter.image(t.id(), image_rect, whole, tint);
         }
         let painter = painter.with_clip_rect(image_rect);
         let line: Vec<Pos2> = self
@@ -542,6 +625,7 @@ impl PhotoApp {
     }
 
     fn ui(&mut self, ui: &mut egui::Ui) {
+        self.poll_backdrop(&ui.ctx().clone());
         self.widgets.clear();
         egui::Panel::right("controls")
             .default_size(330.0)

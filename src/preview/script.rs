@@ -11,9 +11,13 @@
 //! - `button LABEL`: a click on the middle of the widget labelled LABEL (a
 //!   button, or `field NAME` for a text field), as drawn on the last frame;
 //!   it waits up to 120 frames for the widget to appear;
+//! - `slide LABEL F`: a click at the fraction F ∈ [0, 1] of the way along
+//!   the widget labelled LABEL (a slider: the value it sets is F of its
+//!   range), waiting for the widget as `button` does;
 //! - `type TEXT`: TEXT typed into the focused field;
 //! - `wait N`: N frames with no input;
-//! - `wait-fit`: until the running fit is done.
+//! - `wait-fit`: until the running fit is done;
+//! - `wait-render`: until the render of the air behind the photo is done.
 //!
 //! A player sends at most one pointer event a frame (a press and its release
 //! land in different frames, as a hand makes them), so egui sees each click
@@ -32,12 +36,16 @@ pub enum Step {
     Drag([f64; 2], [f64; 2]),
     /// A click on a labelled widget.
     Button(String),
+    /// A click at a fraction of the way along a labelled widget.
+    Slide(String, f64),
     /// Text typed.
     Type(String),
     /// Frames with no input.
     Wait(u32),
     /// Until the fit is done.
     WaitFit,
+    /// Until the render behind the photo is done.
+    WaitRender,
 }
 
 /// One input event, in screen points.
@@ -57,10 +65,13 @@ pub enum Event {
 pub trait Stage {
     /// The screen point of photo pixel `p`.
     fn photo_to_screen(&self, p: [f64; 2]) -> Option<[f64; 2]>;
-    /// The middle of the widget labelled `label` on the last frame.
-    fn widget(&self, label: &str) -> Option<[f64; 2]>;
+    /// The rectangle (min x, min y, max x, max y) of the widget labelled
+    /// `label` on the last frame.
+    fn widget(&self, label: &str) -> Option<[f64; 4]>;
     /// Whether a fit is running.
     fn fitting(&self) -> bool;
+    /// Whether the render behind the photo is running.
+    fn rendering(&self) -> bool;
 }
 
 /// Reads a script.
@@ -104,10 +115,27 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<(usize, Step)>> {
                     .map_err(|e| bad(format!("`wait` takes a frame count: {e}")))?;
                 Step::Wait(n)
             }
+            "slide" => {
+                let (label, f) = rest
+                    .rsplit_once(char::is_whitespace)
+                    .map(|(l, f)| (l.trim(), f.parse::<f64>()))
+                    .unwrap_or(("", Ok(f64::NAN)));
+                match f {
+                    Ok(f) if !label.is_empty() && (0.0..=1.0).contains(&f) => {
+                        Step::Slide(label.to_string(), f)
+                    }
+                    _ => {
+                        return Err(bad(format!(
+                            "`slide` takes a widget's label and a fraction in [0, 1], got `{rest}`"
+                        )));
+                    }
+                }
+            }
             "wait-fit" if rest.is_empty() => Step::WaitFit,
+            "wait-render" if rest.is_empty() => Step::WaitRender,
             _ => {
                 return Err(bad(format!(
-                    "`{line}`: expected click U V, drag U0 V0 U1 V1, button LABEL, type TEXT, wait N or wait-fit"
+                    "`{line}`: expected click U V, drag U0 V0 U1 V1, button LABEL, slide LABEL F, type TEXT, wait N, wait-fit or wait-render"
                 )));
             }
         };
@@ -189,15 +217,20 @@ impl Player {
                 }
                 self.queue.push_back(Event::Release(b));
             }
-            Step::Button(label) => match stage.widget(&label) {
-                Some(c) => {
+            Step::Button(ref label) | Step::Slide(ref label, _) => match stage.widget(label) {
+                Some(r) => {
                     self.tries = 0;
+                    let f = match step {
+                        Step::Slide(_, f) => f,
+                        _ => 0.5,
+                    };
+                    let c = [r[0] + f * (r[2] - r[0]), 0.5 * (r[1] + r[3])];
                     self.queue
                         .extend([Event::Move(c), Event::Press(c), Event::Release(c)]);
                 }
                 None if self.tries < WIDGET_PATIENCE => {
                     self.tries += 1;
-                    self.steps.push_front((line, Step::Button(label)));
+                    self.steps.push_front((line, step.clone()));
                     return Ok(Vec::new());
                 }
                 None => {
@@ -208,9 +241,13 @@ impl Player {
             },
             Step::Type(t) => self.queue.push_back(Event::Text(t)),
             Step::Wait(n) => self.wait = n,
-            Step::WaitFit => {
-                if stage.fitting() {
-                    self.steps.push_front((line, Step::WaitFit));
+            Step::WaitFit | Step::WaitRender => {
+                let busy = match step {
+                    Step::WaitFit => stage.fitting(),
+                    _ => stage.rendering(),
+                };
+                if busy {
+                    self.steps.push_front((line, step));
                 }
                 return Ok(Vec::new());
             }
@@ -240,8 +277,15 @@ mod tests {
         fn photo_to_screen(&self, p: [f64; 2]) -> Option<[f64; 2]> {
             Some([10.0 + 2.0 * p[0], 20.0 + 2.0 * p[1]])
         }
-        fn widget(&self, label: &str) -> Option<[f64; 2]> {
-            (label == "Fit").then_some([500.0, 40.0])
+        fn widget(&self, label: &str) -> Option<[f64; 4]> {
+            match label {
+                "Fit" => Some([480.0, 30.0, 520.0, 50.0]),
+                "blend" => Some([400.0, 60.0, 600.0, 70.0]),
+                _ => None,
+            }
+        }
+        fn rendering(&self) -> bool {
+            false
         }
         fn fitting(&self) -> bool {
             let n = self.fitting.get();
@@ -265,7 +309,7 @@ mod tests {
     fn steps_become_one_pointer_event_a_frame_in_screen_points() {
         let fake = Fake { fitting: 3.into() };
         let frames = play(
-            "click 5 5 # a comment\n\nbutton Fit\nwait-fit\ndrag 0 0 4 8\ntype 12.5\nwait 2\n",
+            "click 5 5 # a comment\n\nbutton Fit\nwait-fit\ndrag 0 0 4 8\ntype 12.5\nwait 2\nwait-render\nslide blend 0.25\n",
             &fake,
         );
         let events: Vec<Event> = frames.iter().flatten().cloned().collect();
@@ -290,7 +334,9 @@ mod tests {
         assert_eq!(events[11], Event::Move([18.0, 36.0]));
         assert_eq!(events[12], Event::Release([18.0, 36.0]));
         assert_eq!(events[13], Event::Text("12.5".into()));
-        assert_eq!(events.len(), 14);
+        // A quarter of the way along the slider, at its middle height.
+        assert_eq!(events[14], Event::Move([450.0, 65.0]));
+        assert_eq!(events.len(), 17);
         // The fit's three busy frames were waited out.
         assert_eq!(fake.fitting.get(), 0);
     }
@@ -308,7 +354,17 @@ mod tests {
         };
         assert!(err.to_string().contains("line 2"), "{err}");
         assert!(err.to_string().contains("`Save`"), "{err}");
-        for bad in ["click 1", "drag 1 2 3 x", "wait -1", "jump", "click 1 nan"] {
+        for bad in [
+            "click 1",
+            "drag 1 2 3 x",
+            "wait -1",
+            "jump",
+            "click 1 nan",
+            "slide blend",
+            "slide 0.5",
+            "slide blend 1.5",
+            "wait-render now",
+        ] {
             let e = parse(&format!("wait 1\n{bad}"), Path::new("s.txt")).unwrap_err();
             assert!(e.to_string().contains("line 2"), "{bad}: {e}");
         }

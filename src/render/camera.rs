@@ -84,6 +84,23 @@ impl Camera {
         }
     }
 
+    /// The camera of a photo ([`Lens`], in the frame the lens's axes are
+    /// given in) at `origin`, its image `width` × `height` pixels: each
+    /// pixel's ray is the lens's (undistorted to 1e-15). `forward`, `right`
+    /// and `up` are the lens's axes and the pixel angle its focal length's.
+    pub fn from_lens(origin: DVec3, lens: Lens, width: u32, height: u32) -> Camera {
+        Camera {
+            origin,
+            forward: dvec(lens.axis),
+            right: dvec(lens.right),
+            up: dvec(lens.up),
+            tan_half: 0.5 * height as f64 / lens.f,
+            width,
+            height,
+            lens: Some(lens),
+        }
+    }
+
     fn aspect(&self) -> f64 {
         self.width as f64 / self.height as f64
     }

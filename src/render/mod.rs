@@ -208,7 +208,19 @@ impl Renderer {
             ),
             (None, None) => (w0, h0),
         };
-        let camera = Camera::with_size(&scene.camera, width, height);
+        Renderer::with_camera(
+            scene,
+            options,
+            Camera::with_size(&scene.camera, width, height),
+        )
+    }
+
+    /// Prepares `scene` for rendering through `camera` instead of the
+    /// scene's own (the previewer renders a photo problem's air through the
+    /// photo's camera, [`crate::photo::camera::Camera`], in the problem's
+    /// frame). The camera's origin should be the scene camera's position:
+    /// the sky is set up for that height.
+    pub fn with_camera(scene: &Scene, options: &RenderOptions, camera: Camera) -> Renderer {
         let objects_box = Aabb::of_objects(&scene.objects);
         let air = Air::new(
             &scene.medium,
