@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 root=..
 c=corpus
-mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured" "$c/sounding" "$c/geo"
+mkdir -p "$c/problem" "$c/scene" "$c/fit_result" "$c/air" "$c/structured" "$c/sounding" "$c/geo" "$c/photo"
 
 # Problem files, as they are.
 for f in "$root"/problems/*.json "$root"/problems/atmospheres/*.json "$root"/problems/grow/*.json; do
@@ -103,6 +103,72 @@ for k, v in enumerate(variants):
     with open(f"{sys.argv[2]}-{k}", "w") as out:
         out.write("\x02")
         out.write(json.dumps(v))
+PY
+done
+# Photo problems: the problem, a NUL, then the image's bytes (the target writes
+# them as `image.bin`). Small PNGs written here (some with an eXIf chunk giving
+# FocalLengthIn35mmFilm), problems over both earths with target and horizon
+# marks, distortion and free camera numbers; and the bundled photo problems
+# with their own images.
+python3 - "$c/photo" <<'PY'
+import json, struct, sys, zlib
+out = sys.argv[1]
+
+def chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+def exif(focal35):
+    # A little-endian TIFF header, IFD0 with one entry (the Exif IFD's
+    # offset), and the Exif IFD with FocalLengthIn35mmFilm (SHORT).
+    ifd0 = struct.pack("<H", 1) + struct.pack("<HHII", 0x8769, 4, 1, 26) + struct.pack("<I", 0)
+    sub = struct.pack("<H", 1) + struct.pack("<HHIHH", 0xA405, 3, 1, focal35, 0) + struct.pack("<I", 0)
+    return b"II*\x00" + struct.pack("<I", 8) + ifd0 + sub
+
+def png(w, h, focal35=None):
+    raw = b"".join(b"\x00" + bytes((x * 7 + y * 3) % 256 for x in range(w * 3)) for y in range(h))
+    body = chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+    if focal35:
+        body += chunk(b"eXIf", exif(focal35))
+    return b"\x89PNG\r\n\x1a\n" + body + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+
+air = {"air": {"temperature": {"base": 12.0, "lapse": -0.0065}, "pressure": 101325.0, "humidity": 0.0}}
+logistic = {"scale": 0.015, "background": {"n": 1.0, "a": 300.0}, "inversion": {"n": 0.9, "a": 2.0, "height": 15.0}}
+cases = []
+for k, (earth, medium, focal, horizon, dist, free) in enumerate([
+    ("round", air, {"horizontal_fov": 10.0}, True, None, ["air.temperature.lapse", "camera.tilt"]),
+    ("flat", air, {"horizontal_fov": 30.0}, False, {"k1": -0.05}, ["camera.tilt", "camera.roll", "camera.azimuth"]),
+    ("round", logistic, {"focal_length": 50.0, "sensor_width": 36.0}, True, {"k1": -0.1, "k2": 0.01, "p1": 1e-3}, ["camera.tilt", "camera.distortion.k1"]),
+    ("round", air, {}, True, None, ["camera.tilt", "camera.roll"]),
+    ("flat", logistic, {"horizontal_fov": 8.0, "principal_point": [30.0, 25.0]}, False, None, []),
+]):
+    w, h = 64, 48
+    cam = dict(focal, azimuth=0.0, tilt=0.0, roll=0.3, position=[0.0, 10.0, 0.0])
+    if dist:
+        cam["distortion"] = dist
+    marks = [{"name": "lamp", "pixel": [33.5, 22.0], "target": [50.0, 20.0, 3000.0]},
+             {"name": "mast", "pixel": [12.0, 25.5], "target": [-400.0, 5.0, 8000.0]}]
+    if horizon:
+        marks.append({"name": "sea", "pixel": [20.0, 30.0], "horizon": True})
+    p = {"name": f"photo-{k}", "photo": {"image": "image.bin", "camera": cam}, "marks": marks,
+         "noise": 0.5, "medium": medium, "free": free}
+    if earth == "round":
+        p["earth"] = {"radius": 6371000.0}
+    cases.append((f"gen-{k}", json.dumps(p).encode(), png(w, h, 50 if not focal else None)))
+for name, text, image in cases:
+    with open(f"{out}/{name}", "wb") as f:
+        f.write(text + b"\0" + image)
+PY
+for f in "$root"/problems/photo/*.json; do
+    [ -e "$f" ] || continue
+    # Only photo problems (the folder also holds the example's scene and truth).
+    img=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1])).get("photo", {}).get("image", ""))' "$f")
+    [ -n "$img" ] || continue
+    python3 - "$f" "$(dirname "$f")/$img" "$c/photo/bundled-$(basename "$f")" <<'PY'
+import json, sys
+p = json.load(open(sys.argv[1]))
+p["photo"]["image"] = "image.bin"
+with open(sys.argv[3], "wb") as out:
+    out.write(json.dumps(p).encode() + b"\0" + open(sys.argv[2], "rb").read())
 PY
 done
 echo "seeded: $(find "$c" -type f | wc -l) files in $c/"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI's fuzz smoke: builds the seven targets in one cargo call (nightly,
+# CI's fuzz smoke: builds the eight targets in one cargo call (nightly,
 # libFuzzer's coverage instrumentation, no sanitizer, the flags `cargo fuzz
 # build --sanitizer none` uses, so that CI needs no `cargo install cargo-fuzz`),
 # seeds fresh corpora from problems/, and runs each target for a few seconds.
@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 secs=${1:-10}
-targets=(problem scene fit_result air structured sounding geo)
+targets=(problem scene fit_result air structured sounding geo photo)
 triple=$(rustc +nightly -vV | sed -n 's/^host: //p')
 export CARGO_TARGET_DIR=${FUZZ_TARGET_DIR:-$PWD/target}
 # --target keeps the instrumentation out of build scripts and proc macros.

@@ -21,7 +21,7 @@ from nbclient import NotebookClient
 
 HERE = Path(__file__).resolve().parent
 NOTEBOOKS = ["fit_walkthrough.ipynb", "tradeoff.ipynb", "validation.ipynb", "python_api.ipynb",
-             "ensemble.ipynb"]
+             "ensemble.ipynb", "photo.ipynb"]
 
 
 def main(argv: list[str]) -> int:

@@ -28,6 +28,7 @@ pub mod refraction;
 pub mod render;
 pub mod scene;
 pub mod sightline;
+pub mod terrain;
 pub mod trace;
 pub mod tradeoff;
 pub mod validate;

@@ -326,6 +326,62 @@ fn render<'py>(
     Ok((image.width, image.height, PyBytes::new(py, &bytes)))
 }
 
+/// A photo problem's overlay, as `mirage overlay` draws it (its starting
+/// air and camera) or, given `photo` (the `photo` section of the problem's
+/// fit result, JSON text), as `mirage fit --overlay` draws it: `(width,
+/// height, bytes)`, the PNG's RGB pixels row by row.
+#[pyfunction]
+#[pyo3(signature = (text, path, photo=None, threads=None))]
+fn overlay<'py>(
+    py: Python<'py>,
+    text: &str,
+    path: &str,
+    photo: Option<&str>,
+    threads: Option<usize>,
+) -> PyResult<(u32, u32, Bound<'py, PyBytes>)> {
+    use crate::cli::overlay::{overlay_image, overlay_title, starting_report};
+    use crate::fit::photo::PhotoReport;
+    let (_, problem) = problem_of(text, path).map_err(|e| to_py(py, e))?;
+    let fitted = match photo {
+        None => None,
+        Some(t) => Some(serde_json::from_str::<PhotoReport>(t).map_err(|e| {
+            argument_error(
+                py,
+                "result",
+                format!("is not the fit of a photo problem (its `photo` section: {e})"),
+            )
+        })?),
+    };
+    if let (Some(r), Some(setup)) = (&fitted, &problem.photo) {
+        let image = setup.image.display().to_string();
+        if r.image != image || r.marks.len() != setup.marks.len() {
+            return Err(argument_error(
+                py,
+                "result",
+                format!(
+                    "is the fit of another photo problem ({}, {} marks), not of this one ({image}, {} marks)",
+                    r.image,
+                    r.marks.len(),
+                    setup.marks.len()
+                ),
+            ));
+        }
+    }
+    let image = run(py, threads, move || {
+        let (report, fitted) = match fitted {
+            Some(r) => (r, true),
+            None => (starting_report(&problem)?, false),
+        };
+        overlay_image(&problem, &report, &overlay_title(&problem, fitted))
+    })?
+    .map_err(|e| to_py(py, e))?;
+    Ok((
+        image.width(),
+        image.height(),
+        PyBytes::new(py, image.as_raw()),
+    ))
+}
+
 /// δ = n − 1 and ∇δ of a medium (JSON text of the `medium` field) at `k`
 /// points given as little-endian `f64` triples; over the round earth of
 /// `earth_radius` when given. Returns `(delta, gradient)` as bytes of `k` and
@@ -602,6 +658,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(render_check, m)?)?;
+    m.add_function(wrap_pyfunction!(overlay, m)?)?;
     m.add_function(wrap_pyfunction!(medium_eval, m)?)?;
     m.add_function(wrap_pyfunction!(sounding, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;

@@ -212,3 +212,56 @@ fn fuzz_structured_earth_radius_6e303_is_refused() {
     };
     assert_finite_ray(&field, o, d, Method::Dopri5 { tolerance: 1e-3 }, earth, 1e5);
 }
+
+/// The image of [`fuzz_photo_ray_through_the_ground_has_a_finite_jacobian`]: a PNG
+/// whose header says 64 × 9,963,568 pixels (only the header is read).
+const TALL_PNG_HEX: &[&str] = &[
+    "89504e470d0a1a0a0000000d4948445200000040009808300802000000e1a30a6b0000021749444154789c2cd247434a",
+    "356cec9b42d8e6e4dac5bb630057ff6163a704ce0f5db17ef3273dfb8fa59dbf76fbfeb3b75f7e1b16295dae4a6d3b87",
+    "1610b6b974e8e6d367d0c809d3e7842c5bbd695b5ce2a193672fddcc7df4f2c3f7ff6f206cfca34e43d8469d86b08d3a",
+    "0d611b751ac236ea34846dd4ea34846dd46908dba8d310b651a7216ca34e43d8469d86b08d3a0d611b751ac236ea3484",
+    "6dd4000000000000000000006ca34e43d8469d86b08d3a0d611b751ac233eaf43f5b78be009dc8c3120000000049454e",
+    "44ae426082eba16573",
+];
+
+#[test]
+fn fuzz_photo_ray_through_the_ground_has_a_finite_jacobian() {
+    // `photo` found: in an image 9,963,568 pixels tall with a 31° field of
+    // view and k1 = −0.05, a mark near the top row lies far beyond where the
+    // lens folds the image over; undistortion converged to the mirrored
+    // root, a ray straight down, which went 2,000 km through the flat
+    // ground, where the hydrostatic pressure (4e265 Pa) made the camera's
+    // Jacobian NaN. Now such a pixel is refused by name, and a ray that
+    // does go straight down (a mark near the bottom row, no distortion)
+    // keeps a finite Jacobian: the pressure is held at 1e8 Pa below ~50 km.
+    use mirage::fit::objective::Objective;
+    let dir = tempfile::tempdir().unwrap();
+    let hex: String = TALL_PNG_HEX.concat();
+    let bytes: Vec<u8> = (0..hex.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).unwrap())
+        .collect();
+    std::fs::write(dir.path().join("image.bin"), bytes).unwrap();
+    let text = r#"{"name": "photo-1", "photo": {"image": "image.bin", "camera": {"horizontal_fov": 31.0, "azimuth": 0.0, "tilt": 0.0, "roll": 0.3, "position": [0.0, 10.0, 0.0], "distortion": {"k1": -0.05}}}, "marks": [{"name": "lamp", "pixel": [33.5, 22.0], "target": [54.0, 20.0, 300050]}, {"name": "mast", "pixel": [12.0, 25.5], "target": [-400.0, 5.0, 800010]}], "noise": 0.5, "medium": {"air": {"temperature": {"base": 12.0, "lapse": -0.0056}, "pressure": 101325.0, "humidity": 0.0}}, "free": ["camera.tilt", "camera.roll", "camera.azimuth"]}"#;
+    let path = dir.path().join("problem.json");
+    let e = Problem::parse(text, &path).unwrap_err();
+    let (field, message) = named(&e);
+    assert_eq!(field, "marks[0].pixel", "{message}");
+    assert!(message.contains("fold the image over"), "{message}");
+    let down = text
+        .replace(r#", "distortion": {"k1": -0.05}"#, "")
+        .replace("[33.5, 22.0]", "[33.5, 9963500.0]")
+        .replace("[12.0, 25.5]", "[12.0, 9963540.5]");
+    let mut p = Problem::parse(&down, &path).unwrap();
+    for max_steps in [20_000, p.trace.max_steps] {
+        p.trace.max_steps = max_steps;
+        let objective = Objective::from_problem(&p);
+        let x = objective.start();
+        let (r, j) = objective.jacobian(x.as_slice());
+        assert!(r.iter().all(|v| v.is_finite()), "{r:?}");
+        assert!(
+            j.iter().all(|v| v.is_finite()),
+            "max_steps {max_steps}: {j:?}"
+        );
+    }
+}

@@ -6,12 +6,13 @@ mod common;
 
 use std::process::Command;
 
-const NOTEBOOKS: [&str; 5] = [
+const NOTEBOOKS: [&str; 6] = [
     "fit_walkthrough.ipynb",
     "tradeoff.ipynb",
     "validation.ipynb",
     "python_api.ipynb",
     "ensemble.ipynb",
+    "photo.ipynb",
 ];
 
 #[test]
@@ -71,10 +72,13 @@ fn notebooks_execute() {
         assert!(stdout.contains(&format!("{name}: executed")), "{stdout}");
     }
     // What the notebooks made is there (a fit result, a Pareto plot, the
-    // validation table, the ensemble's bands and the hot road's video).
+    // validation table, the ensemble's bands, the hot road's video, and
+    // the bundled photo's fitted profile and overlay).
     assert!(out.path().join("fit.json").exists());
     assert!(out.path().join("pareto.png").exists());
     assert!(out.path().join("validation/results.json").exists());
     assert!(out.path().join("ensemble-bands.png").exists());
     assert!(out.path().join("hot-road.mp4").exists());
+    assert!(out.path().join("photo-profile.png").exists());
+    assert!(out.path().join("photo-overlay.png").exists());
 }

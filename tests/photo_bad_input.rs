@@ -120,6 +120,13 @@ fn every_photo_field_is_checked_by_name() {
             vec!["marks[1].pixel[1]", "outside the image"],
         ),
         (
+            // The fuzz target `photo`: a horizon mark's pixel beyond where
+            // the distortion folds the image over had no ray, and a NaN
+            // residual; a target mark's was refused already.
+            Box::new(|v| set(v, "/photo/camera/distortion", json!({"k1": -200.0}))),
+            vec!["marks[1].pixel", "fold the image over"],
+        ),
+        (
             Box::new(|v| set(v, "/photo/image", json!("nope.jpg"))),
             vec!["photo.image", "nope.jpg"],
         ),

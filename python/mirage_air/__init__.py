@@ -9,6 +9,11 @@ for bit (``fit(p).to_json()`` is what ``mirage fit p -o result.json`` writes).
 >>> result = mirage_air.fit("problems/hot-road.json")
 >>> result.values["hotspots[0].n"]
 -3.0000000000...
+>>> photo = mirage_air.fit("problems/photo/looming.json")     # marks on a photo
+>>> photo.photo["rms_pixels"]
+0.4...
+>>> mirage_air.overlay("problems/photo/looming.json", photo).shape
+(600, 1200, 3)
 >>> image = mirage_air.render("problems/scenes/road.json", width=160)
 >>> image.shape, image.dtype
 ((90, 160, 3), dtype('float32'))
@@ -59,6 +64,7 @@ __all__ = [
     "trace",
     "fit",
     "render",
+    "overlay",
     "sounding",
     "ensemble",
     "render_frames",
@@ -288,7 +294,11 @@ class FitResult:
     ``grow``: what growing the model did (each step's terms, F, criterion,
     and why it stopped), ``None`` for a plain fit; ``sightlines``: each line
     of sight through the fitted air over the round earth (:class:`Sightlines`,
-    ``None`` over the flat ground); ``report``: the whole result."""
+    ``None`` over the flat ground); ``photo``: for a photo problem, the
+    result's ``photo`` section (the camera's numbers, each mark's residual,
+    marked, fitted and straight-ray pixel, the RMS residual in pixels, the
+    apparent horizon: ``docs/photo.md``), else ``None``; ``report``: the
+    whole result."""
 
     medium: Dict[str, Any]
     values: Dict[str, float]
@@ -300,6 +310,7 @@ class FitResult:
     sightlines: Optional[Sightlines] = field(repr=False)
     report: Dict[str, Any] = field(repr=False)
     _json: str = field(repr=False, default="")
+    photo: Optional[Dict[str, Any]] = field(repr=False, default=None)
 
     def to_json(self) -> str:
         """The result as ``mirage fit -o`` writes it, byte for byte."""
@@ -330,6 +341,7 @@ class FitResult:
             sightlines=Sightlines._of(r.get("pairs", [])),
             report=r,
             _json=text + "\n",
+            photo=r.get("photo"),
         )
 
 
@@ -379,6 +391,29 @@ def render(
     :func:`write_video` takes)."""
     s = _scene(scene)
     return _render_frame(s._text, s.path, width, height, spp, albedo, straight, threads, srgb)
+
+
+def overlay(problem: Source, result: Optional[Union["FitResult", Mapping[str, Any]]] = None,
+            threads: Optional[int] = None) -> np.ndarray:
+    """A photo problem's overlay as an ``(H, W, 3)`` uint8 sRGB array, the
+    pixels of the PNG the CLI writes: without ``result``, ``mirage overlay``'s
+    (the marks where the problem's starting air and camera put them); with
+    ``result`` (the :class:`FitResult` of :func:`fit` on this problem, or
+    its ``report`` dict), ``mirage fit --overlay``'s (the fitted air and
+    camera). Per mark: the marked pixel (a ring), where the air puts the
+    target (a cross), where straight rays would (a square); the apparent
+    horizon, the names and the RMS residual (``docs/photo.md``)."""
+    p = _problem(problem)
+    photo = None
+    if result is not None:
+        report = result.report if isinstance(result, FitResult) else result
+        if not isinstance(report, Mapping):
+            raise _argument_error("result", f"must be a FitResult or its report dict, got {type(result).__name__}")
+        if report.get("photo") is None:
+            raise _argument_error("result", "has no `photo` section: it is not the fit of a photo problem")
+        photo = json.dumps(report["photo"])
+    w, h, data = _native.overlay(p._text, p.path, photo, threads)
+    return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3).copy()
 
 
 def _render_frame(text: str, path: str, width: Optional[int], height: Optional[int],

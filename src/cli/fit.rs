@@ -218,7 +218,8 @@ pub fn run(options: &FitOptions) -> Result<FitReport> {
         crate::plot::draw_rays(&problem, &report.medium, rays)?;
     }
     if let (Some(path), Some(photo)) = (&options.overlay, &report.photo) {
-        super::overlay::write_overlay(&problem, photo, &format!("{}: fitted", problem.name), path)?;
+        let title = super::overlay::overlay_title(&problem, true);
+        super::overlay::write_overlay(&problem, photo, &title, path)?;
     }
     print!("{}", fit_summary(&problem, &report));
     let sv = &report.solver;
@@ -275,17 +276,24 @@ pub fn fit_summary(problem: &Problem, r: &FitReport) -> String {
         );
     }
     let _ = writeln!(s, "stopped: {}", sv.stop_reason);
+    // A photo problem's F is in px², where the default target (made for
+    // metres²) says nothing: it is named only when the file sets one.
+    let target = match (sv.reached_target, sv.target_enforced) {
+        (true, _) => format!(" (meets target {:.1e})", sv.target_objective),
+        (false, true) => format!(" (ABOVE target {:.1e})", sv.target_objective),
+        (false, false) if problem.photo.is_some() => String::new(),
+        (false, false) => format!(" (above the default target {:.1e})", sv.target_objective),
+    };
+    let largest = if problem.photo.is_some() {
+        "largest miss at a target"
+    } else {
+        "largest"
+    };
     let _ = writeln!(
         s,
-        "objective F = {:.6e} {} ({} target {:.1e})   summed distance = {:.4e} {}   largest = {:.4e} m",
+        "objective F = {:.6e} {}{target}   summed distance = {:.4e} {}   {largest} = {:.4e} m",
         r.totals.objective,
         super::sightline::objective_unit(problem),
-        match (sv.reached_target, sv.target_enforced) {
-            (true, _) => "meets",
-            (false, true) => "ABOVE",
-            (false, false) => "above the default",
-        },
-        sv.target_objective,
         r.totals.summed_distance,
         super::sightline::summed_unit(problem),
         r.totals.max_distance

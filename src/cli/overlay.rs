@@ -43,6 +43,16 @@ pub fn starting_report(problem: &Problem) -> Result<PhotoReport> {
     })
 }
 
+/// The overlay's title: the problem's name, and whether the air and the
+/// camera drawn are fitted or the problem's starting ones.
+pub fn overlay_title(problem: &Problem, fitted: bool) -> String {
+    if fitted {
+        format!("{}: fitted", problem.name)
+    } else {
+        format!("{}: starting air and camera (not fitted)", problem.name)
+    }
+}
+
 /// Draws `report` over the problem's photo and writes it to `path` (PNG,
 /// atomically).
 pub fn write_overlay(
@@ -51,8 +61,35 @@ pub fn write_overlay(
     title: &str,
     path: &Path,
 ) -> Result<()> {
-    let Some(setup) = &problem.photo else {
+    if problem.photo.is_none() {
         return Ok(());
+    }
+    let image = overlay_image(problem, report, title)?;
+    let mut bytes = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut bytes),
+        image.as_raw(),
+        image.width(),
+        image.height(),
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| Error::encode("the overlay PNG", e))?;
+    crate::io::write_atomic(path, &bytes)
+}
+
+/// The overlay of `report` on the problem's photo, as pixels (what
+/// [`write_overlay`] writes as a PNG).
+pub fn overlay_image(
+    problem: &Problem,
+    report: &PhotoReport,
+    title: &str,
+) -> Result<image::RgbImage> {
+    let Some(setup) = &problem.photo else {
+        return Err(Error::input(
+            &problem.source,
+            "photo",
+            "missing: an overlay draws a photo problem's marks on its photo; this problem has no `photo` section",
+        ));
     };
     let picture = Picture::read(&setup.image)
         .and_then(|p| p.decode())
@@ -73,17 +110,7 @@ pub fn write_overlay(
         title: title.to_string(),
         rms_pixels: Some(report.rms_pixels),
     };
-    let image = draw_overlay(&picture, &overlay);
-    let mut bytes = Vec::new();
-    image::ImageEncoder::write_image(
-        image::codecs::png::PngEncoder::new(&mut bytes),
-        image.as_raw(),
-        image.width(),
-        image.height(),
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| Error::encode("the overlay PNG", e))?;
-    crate::io::write_atomic(path, &bytes)
+    Ok(draw_overlay(&picture, &overlay))
 }
 
 /// Runs `mirage overlay`.
@@ -97,7 +124,7 @@ pub fn run(o: &OverlayOptions) -> Result<PhotoReport> {
     write_overlay(
         &problem,
         &report,
-        &format!("{}: starting air and camera (not fitted)", problem.name),
+        &overlay_title(&problem, false),
         &o.output,
     )?;
     print!("{}", photo_summary(&report));

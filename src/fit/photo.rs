@@ -23,25 +23,25 @@ use crate::pair::PointPair;
 use crate::photo::camera::Camera;
 use crate::trace::{TraceOptions, trace_launched};
 use num_dual::DualSVec64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 type D2 = DualSVec64<2>;
 
 /// One mark in a photo result.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MarkReport {
     /// Its name.
     pub name: String,
     /// The marked pixel.
     pub pixel: [f64; 2],
     /// A horizon mark.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub horizon: bool,
     /// Where the fitted air and camera put its target (for a horizon mark:
     /// the apparent horizon in its column); `None` where no ray reaches it.
     pub predicted: Option<[f64; 2]>,
     /// Where straight rays would put its target (none for horizon marks).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub straight: Option<[f64; 2]>,
     /// Its residual (pixels): the angle miss times f for a target mark (the
     /// norm of the residual's three components), the elevation difference
@@ -50,7 +50,7 @@ pub struct MarkReport {
 }
 
 /// The photo section of a fit result.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhotoReport {
     /// The image.
     pub image: String,
@@ -68,7 +68,7 @@ pub struct PhotoReport {
     /// per target mark, one per horizon mark.
     pub rms_pixels: f64,
     /// The apparent horizon's elevation (degrees), when the earth is round.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub horizon_elevation: Option<f64>,
     /// The apparent horizon across the image (pixels), left to right.
     pub horizon_line: Vec<[f64; 2]>,

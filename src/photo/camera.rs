@@ -172,7 +172,7 @@ pub struct CameraParams {
 }
 
 /// A camera evaluated in numbers `T` (see the module doc).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera<T = f64> {
     /// Focal length (pixels).
     pub f: T,
@@ -338,6 +338,17 @@ impl<T: Real> Camera<T> {
             }
         }
         if !converged {
+            return None;
+        }
+        // Only a root on the lens's unfolded side is the pixel's ray: the
+        // radial factor positive (not flipped through the centre) and the
+        // map orientation-preserving there. Beyond the fold Newton may
+        // still find a mirrored root; it is no ray of this pixel.
+        let [k1, k2, k3, _, _] = re.dist;
+        let r2 = x * x + y * y;
+        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        let (_, _, j) = re.distortion_step(x, y);
+        if radial <= 0.0 || j[0][0] * j[1][1] - j[0][1] * j[1][0] <= 0.0 {
             return None;
         }
         // One Newton step in T from the root: the implicit derivative.

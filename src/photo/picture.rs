@@ -9,15 +9,18 @@
 //! decodes the pixels, as 8-bit RGB, only for the commands that draw on the
 //! photo.
 //!
-//! The pixels are those stored in the file: an EXIF `Orientation` tag is not
-//! applied (pixels of a photo problem are those of the stored image),
-//! 16-bit channels are reduced to 8 bits, grey becomes RGB and an alpha
+//! The pixels are those of the image **as displayed**: an EXIF `Orientation`
+//! tag (a phone held upright stores its picture turned and says so) is
+//! applied, as every viewer applies it, so the width, the height and the
+//! marks' pixels are those a user sees and measures; a file without the tag
+//! is as stored. 16-bit channels are reduced to 8 bits, grey becomes RGB and an alpha
 //! channel is dropped without compositing. Decoding is bounded by the `image`
 //! crate's default memory limit (512 MiB), so a file whose header claims an
 //! absurd size is refused with [`PictureError::TooLarge`] instead of
 //! exhausting memory.
 
-use image::{ImageError, ImageFormat, ImageReader, RgbImage};
+use image::metadata::Orientation;
+use image::{DynamicImage, ImageDecoder, ImageError, ImageFormat, ImageReader, RgbImage};
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
@@ -25,10 +28,13 @@ use std::path::{Path, PathBuf};
 /// bytes (kept for the EXIF and for decoding later).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Picture {
-    /// Width W in pixels (u runs over 0 … W − 1).
+    /// Width W in pixels as displayed (u runs over 0 … W − 1).
     pub width: u32,
-    /// Height H in pixels (v runs over 0 … H − 1).
+    /// Height H in pixels as displayed (v runs over 0 … H − 1).
     pub height: u32,
+    /// The EXIF orientation that turns the stored pixels into the displayed
+    /// ones (`NoTransforms` without the tag).
+    pub orientation: Orientation,
     /// The whole file, as read.
     pub bytes: Vec<u8>,
 }
@@ -211,14 +217,24 @@ impl Picture {
                 path: path_buf(),
                 found: describe(&bytes),
             })?;
-        let (width, height) =
-            reader(&bytes)
-                .into_dimensions()
-                .map_err(|source| PictureError::Corrupt {
-                    path: path_buf(),
-                    format,
-                    source,
-                })?;
+        let corrupt = |source| PictureError::Corrupt {
+            path: path_buf(),
+            format,
+            source,
+        };
+        let (stored_w, stored_h, orientation) = {
+            let mut decoder = reader(&bytes).into_decoder().map_err(corrupt)?;
+            let (w, h) = decoder.dimensions();
+            // A broken EXIF block is no reason to refuse a readable image: it
+            // is read as no orientation, as viewers do.
+            let o = decoder.orientation().unwrap_or(Orientation::NoTransforms);
+            (w, h, o)
+        };
+        let (width, height) = if turns(orientation) {
+            (stored_h, stored_w)
+        } else {
+            (stored_w, stored_h)
+        };
         if width == 0 || height == 0 {
             return Err(PictureError::ZeroSize {
                 path: path_buf(),
@@ -229,6 +245,7 @@ impl Picture {
         Ok(Picture {
             width,
             height,
+            orientation,
             bytes,
         })
     }
@@ -236,17 +253,39 @@ impl Picture {
     /// Decodes the pixels as 8-bit RGB (see the module's notes on
     /// orientation, depth and alpha). The result is `width` × `height`.
     pub fn decode(&self) -> Result<RgbImage, PictureError> {
-        let image = reader(&self.bytes)
-            .decode()
-            .map_err(|source| match source {
-                ImageError::Limits(_) => PictureError::TooLarge {
-                    width: self.width,
-                    height: self.height,
-                },
-                source => PictureError::Undecodable { source },
-            })?;
+        let too_large_or_undecodable = |source| match source {
+            ImageError::Limits(_) => PictureError::TooLarge {
+                width: self.width,
+                height: self.height,
+            },
+            source => PictureError::Undecodable { source },
+        };
+        let mut decoder = reader(&self.bytes)
+            .into_decoder()
+            .map_err(too_large_or_undecodable)?;
+        // What `ImageReader::decode` does before allocating: the whole
+        // buffer counts against the limit, so that a header claiming an
+        // absurd size is refused instead of exhausting memory.
+        let mut limits = image::Limits::default();
+        limits
+            .reserve(decoder.total_bytes())
+            .and_then(|()| decoder.set_limits(limits))
+            .map_err(too_large_or_undecodable)?;
+        let mut image = DynamicImage::from_decoder(decoder).map_err(too_large_or_undecodable)?;
+        image.apply_orientation(self.orientation);
         Ok(image.into_rgb8())
     }
+}
+
+/// Whether `o` swaps width and height (a quarter turn, with or without a flip).
+fn turns(o: Orientation) -> bool {
+    matches!(
+        o,
+        Orientation::Rotate90
+            | Orientation::Rotate270
+            | Orientation::Rotate90FlipH
+            | Orientation::Rotate270FlipH
+    )
 }
 
 /// A reader of `bytes` whose format is told by their content (falling back
@@ -282,15 +321,23 @@ mod tests {
     }
 
     fn jpeg_bytes(img: &RgbImage) -> Vec<u8> {
+        jpeg_with(img, 95, None)
+    }
+
+    /// A JPEG of `img` at `quality`, with `exif` (a TIFF block) when given.
+    fn jpeg_with(img: &RgbImage, quality: u8, exif: Option<Vec<u8>>) -> Vec<u8> {
         let mut out = Vec::new();
-        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95)
-            .write_image(
-                img.as_raw(),
-                img.width(),
-                img.height(),
-                ExtendedColorType::Rgb8,
-            )
-            .unwrap();
+        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality);
+        if let Some(tiff) = exif {
+            enc.set_exif_metadata(tiff).unwrap();
+        }
+        enc.write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            ExtendedColorType::Rgb8,
+        )
+        .unwrap();
         out
     }
 
@@ -308,6 +355,62 @@ mod tests {
         let pic = Picture::read(&path).unwrap();
         assert_eq!((pic.width, pic.height), (37, 21));
         assert_eq!(pic.decode().unwrap(), img);
+    }
+
+    /// A JPEG of `img` whose EXIF says `Orientation` = `code`.
+    fn jpeg_oriented(img: &RgbImage, code: u16) -> Vec<u8> {
+        let field = exif::Field {
+            tag: exif::Tag::Orientation,
+            ifd_num: exif::In::PRIMARY,
+            value: exif::Value::Short(vec![code]),
+        };
+        let mut writer = exif::experimental::Writer::new();
+        writer.push_field(&field);
+        let mut tiff = Cursor::new(Vec::new());
+        writer.write(&mut tiff, false).unwrap();
+        jpeg_with(img, 100, Some(tiff.into_inner()))
+    }
+
+    #[test]
+    fn exif_orientation_gives_the_image_as_displayed() {
+        // Two flat halves (left dark, right bright), so that JPEG's loss
+        // cannot hide which way the picture was turned.
+        let img = RgbImage::from_fn(40, 24, |x, _| {
+            if x < 20 {
+                Rgb([20, 20, 20])
+            } else {
+                Rgb([230, 230, 230])
+            }
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let bright = |p: &Rgb<u8>| p.0[0] > 128;
+        // 1: as stored; 6: turn 90° clockwise (the left half goes on top);
+        // 8: 90° anticlockwise (the left half at the bottom); 3: 180°.
+        for (code, size, top_left_bright, bottom_left_bright) in [
+            (1u16, (40, 24), false, false),
+            (6, (24, 40), false, true),
+            (8, (24, 40), true, false),
+            (3, (40, 24), true, true),
+            (2, (40, 24), true, true),
+        ] {
+            let path = write(&dir, &format!("o{code}.jpg"), &jpeg_oriented(&img, code));
+            let pic = Picture::read(&path).unwrap();
+            assert_eq!((pic.width, pic.height), size, "orientation {code}");
+            let shown = pic.decode().unwrap();
+            assert_eq!(shown.dimensions(), size, "orientation {code}");
+            let (w, h) = size;
+            assert_eq!(
+                bright(shown.get_pixel(2, 2)),
+                top_left_bright,
+                "orientation {code}"
+            );
+            assert_eq!(
+                bright(shown.get_pixel(2, h - 3)),
+                bottom_left_bright,
+                "orientation {code}"
+            );
+            assert!(w > 3);
+        }
     }
 
     #[test]

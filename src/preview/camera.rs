@@ -60,6 +60,7 @@ impl CameraState {
                 vertical_fov: self.fov,
                 width,
                 height,
+                lens: Default::default(),
             },
             width,
             height,
@@ -103,6 +104,7 @@ mod tests {
             vertical_fov: 1.2,
             width: 1280,
             height: 720,
+            lens: Default::default(),
         })
     }
 

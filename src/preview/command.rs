@@ -56,6 +56,11 @@ pub struct PreviewOptions {
     /// Leave out the scene's veiling glare.
     #[arg(long)]
     pub no_glare: bool,
+    /// A photo problem's window: play this script of clicks, drags, typing
+    /// and button presses (one a line: `click U V`, `drag U0 V0 U1 V1`,
+    /// `button LABEL`, `type TEXT`, `wait N`, `wait-fit`), then close.
+    #[arg(long)]
+    pub script: Option<PathBuf>,
 }
 
 /// `--frames`: at least 1.
@@ -78,6 +83,15 @@ fn frame_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u
 /// `mirage preview`: the window, or with `headless` one frame to a PNG (and
 /// with `bench` the time per frame).
 pub fn preview_command(o: &PreviewOptions) -> Result<()> {
+    if super::photo::is_photo_problem(&o.input)? {
+        return photo_preview(o);
+    }
+    if o.script.is_some() {
+        return Err(Error::usage(
+            "--script",
+            "only for a photo problem's window (a problem with a `photo` section)",
+        ));
+    }
     let (width, height) = (o.width, o.height);
     let mut input = load_input(&o.input)?;
     if o.no_glare {
@@ -192,4 +206,62 @@ pub fn preview_command(o: &PreviewOptions) -> Result<()> {
         write_atomic(out, &png)?;
     }
     Ok(())
+}
+
+/// `mirage preview PHOTO-PROBLEM.json`: the photo mode's window
+/// ([`super::photo_window`]).
+fn photo_preview(o: &PreviewOptions) -> Result<()> {
+    let refused = [
+        (o.headless, "--headless"),
+        (o.output.is_some(), "--output"),
+        (o.bench, "--bench"),
+        (o.albedo, "--albedo"),
+        (o.straight, "--straight"),
+        (o.spp.is_some(), "--spp"),
+        (o.no_glare, "--no-glare"),
+    ];
+    if let Some((_, flag)) = refused.iter().find(|(on, _)| *on) {
+        return Err(Error::usage(
+            *flag,
+            "not for a photo problem: its window shows the photo and its marks (`mirage overlay P.json -o O.png` draws them without a window)",
+        ));
+    }
+    let mut inputs: Vec<&Path> = vec![o.input.as_path()];
+    inputs.extend(o.script.as_deref());
+    check_outputs(
+        Output::optional(
+            "--screenshot",
+            o.screenshot.as_ref(),
+            OutputKind::Png("a screenshot"),
+        ),
+        &inputs,
+    )?;
+    let session = super::photo::PhotoSession::open(&o.input)?;
+    let image = session
+        .problem
+        .photo
+        .as_ref()
+        .map(|s| s.image.clone())
+        .unwrap_or_default();
+    let photo = crate::photo::picture::Picture::read(&image)
+        .and_then(|p| p.decode())
+        .map_err(|e| Error::input(&o.input, "photo.image", e.to_string()))?;
+    let script = match &o.script {
+        Some(path) => {
+            let text = crate::io::json::read_input(path)?;
+            let steps = super::script::parse(&text, path)?;
+            Some(super::script::Player::new(steps, path))
+        }
+        None => None,
+    };
+    super::photo_window::run(
+        session,
+        photo,
+        super::photo_window::PhotoWindowSettings {
+            size: (o.width, o.height),
+            frames: o.frames,
+            screenshot: o.screenshot.clone(),
+            script,
+        },
+    )
 }

@@ -320,6 +320,7 @@ mod tests {
             vertical_fov: 30.0,
             width: 100,
             height: 50,
+            lens: Default::default(),
         });
         let p = ground_point(&cam, 50.0, 25.0).unwrap();
         assert!((p - DVec3::new(0.0, 0.0, 12.0)).length() < 1e-9, "{p}");

@@ -22,6 +22,34 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
 }
 
+/// The window surface's configuration: the first non-sRGB format it offers
+/// (egui wants one; the display shader encodes sRGB itself), else its first,
+/// at `width` × `height` (at least 1 × 1), vsync, two frames in flight.
+pub fn surface_config(
+    caps: &wgpu::SurfaceCapabilities,
+    width: u32,
+    height: u32,
+) -> Result<wgpu::SurfaceConfiguration> {
+    let format = caps
+        .formats
+        .iter()
+        .copied()
+        .find(|f| !f.is_srgb())
+        .or_else(|| caps.formats.first().copied())
+        .ok_or_else(|| Error::gpu("configuring the surface", "it supports no format"))?;
+    Ok(wgpu::SurfaceConfiguration {
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        format,
+        width: width.max(1),
+        height: height.max(1),
+        present_mode: wgpu::PresentMode::AutoVsync,
+        desired_maximum_frame_latency: 2,
+        alpha_mode: caps.alpha_modes[0],
+        view_formats: vec![],
+        color_space: wgpu::SurfaceColorSpace::Auto,
+    })
+}
+
 impl Gpu {
     /// A device on the default adapter (a software one if that is all there
     /// is); `Err` with the reason when there is none.

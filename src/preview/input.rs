@@ -119,6 +119,8 @@ pub fn problem_scene(problem: &Problem, path: &Path) -> Result<Scene> {
             vertical_fov: 2.0,
             width: BENCH_SIZE.0,
             height: BENCH_SIZE.1,
+            roll: None,
+            distortion: None,
         },
         medium: Some(problem.medium.clone()),
         medium_from: None,

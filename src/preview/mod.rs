@@ -26,8 +26,11 @@ pub mod gpu;
 pub mod input;
 pub mod layout;
 pub mod pack;
+pub mod photo;
+pub mod photo_window;
 pub mod program;
 pub mod real_air;
+pub mod script;
 pub mod shader;
 pub mod window;
 

@@ -34,7 +34,7 @@ use super::accumulate::Accumulation;
 use super::camera::{CameraState, MAX_FOV, MIN_FOV};
 use super::display::{display_pipeline, read_png};
 use super::editing::{self, Drag, FitJob};
-use super::gpu::{Gpu, Tracer, copy_to_buffer};
+use super::gpu::{Gpu, Tracer, copy_to_buffer, surface_config};
 use super::input::Input;
 use super::pack::{SceneBuffers, View, pack};
 use crate::error::{Error, FieldError, Result};
@@ -285,26 +285,9 @@ impl App {
             self.render_scale = 2;
         }
         let caps = surface.get_capabilities(&gpu.adapter);
-        // egui wants a non-sRGB target; the display shader encodes sRGB itself.
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| !f.is_srgb())
-            .or_else(|| caps.formats.first().copied())
-            .ok_or_else(|| Error::gpu("configuring the surface", "it supports no format"))?;
         let size = window.inner_size();
-        let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes[0],
-            view_formats: vec![],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-        };
+        let config = surface_config(&caps, size.width, size.height)?;
+        let format = config.format;
         surface.configure(&gpu.device, &config);
         let view = self.view(64, 36);
         let buffers = pack(&self.input.scene, &self.shown_medium(), &view)

@@ -204,13 +204,14 @@ pub fn load(
     for (i, entry) in fields.marks.iter().enumerate() {
         let within = |e: FieldError| e.within(&format!("marks[{i}]")).in_file(path);
         let mark = entry.resolve(i, &camera, site, radius).map_err(within)?;
+        // Every mark's pixel, a target's or the horizon's, needs a ray.
+        let ray = start.ray(mark.pixel).ok_or_else(|| {
+            within(FieldError::new(
+                "pixel",
+                "cannot be undistorted: the distortion coefficients fold the image over before this pixel",
+            ))
+        })?;
         if let Some(target) = mark.target {
-            let ray = start.ray(mark.pixel).ok_or_else(|| {
-                within(FieldError::new(
-                    "pixel",
-                    "cannot be undistorted: the distortion coefficients fold the image over before this pixel",
-                ))
-            })?;
             let o = crate::math::V3::from(position);
             let range = (crate::math::V3::from(target) - o).norm();
             let pair = PointPair {

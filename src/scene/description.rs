@@ -20,7 +20,7 @@
 //!
 //! | field | meaning |
 //! | --- | --- |
-//! | `camera` | pinhole camera: `position`, `look_at` (metres), `up` (default `[0, 1, 0]`), `vertical_fov` (degrees, any value in (0, 179]; telephoto fractions of a degree are fine), `width`, `height` (pixels) |
+//! | `camera` | pinhole camera: `position`, `look_at` (metres), `up` (default `[0, 1, 0]`), `vertical_fov` (degrees, any value in (0, 179]; telephoto fractions of a degree are fine), `width`, `height` (pixels); optional `roll` (degrees, clockwise as one looks through) and `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`: OpenCV's Brown–Conrady, as in `docs/photo.md`; focal length (height / 2) / tan(vertical_fov / 2) pixels, principal point the image's centre) |
 //! | `medium` | the air, inline ([`Medium`], as in problem files) |
 //! | `medium_from` | instead of `medium`: a JSON file (path relative to the scene file) whose `medium` field is read, e.g. the result of `mirage fit`, or a problem file (its starting air) |
 //! | `ground` | optional plane y = 0: either `albedo` `[r, g, b]`, or `checker` with `size` (metres) and two `colors`; absent: no ground |
@@ -43,6 +43,7 @@ use crate::error::{Error, Result};
 use crate::geo::{Angle, Horizon, Point, Site, earth_of};
 use crate::io::json::{parse_json, read_input};
 use crate::medium::Medium;
+use crate::photo::spec::Distortion;
 use crate::trace::{Earth, EarthSpec};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -89,6 +90,15 @@ pub struct CameraSpec {
     pub width: u32,
     /// Image height (pixels).
     pub height: u32,
+    /// Roll about the view direction, degrees, positive when the camera is
+    /// turned clockwise as one looks through it (its right side lower), as
+    /// in a photo problem's camera (`docs/photo.md`); default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roll: Option<f64>,
+    /// OpenCV's Brown–Conrady lens distortion (`k1`, `k2`, `k3`, `p1`,
+    /// `p2`), as in a photo problem's camera; default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion: Option<Distortion>,
 }
 
 /// An object as a scene file gives it: a [`SceneObject`] (`name`, `albedo`,
@@ -324,6 +334,55 @@ pub struct CameraSettings {
     pub width: u32,
     /// Height (pixels).
     pub height: u32,
+    /// Roll and lens distortion (none by default).
+    pub lens: Lens,
+}
+
+/// A scene camera's roll and lens distortion, in the photo camera's terms
+/// (`docs/photo.md`): the focal length in pixels is (height / 2) /
+/// tan(vertical_fov / 2) and the principal point the image's centre.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Lens {
+    /// Roll, degrees (clockwise as one looks through the camera).
+    pub roll: f64,
+    /// Brown–Conrady k1, k2, k3, p1, p2.
+    pub distortion: [f64; 5],
+}
+
+impl Lens {
+    /// Whether the lens is the plain pinhole (no roll, no distortion).
+    pub fn is_pinhole(&self) -> bool {
+        self.roll == 0.0 && self.distortion.iter().all(|&k| k == 0.0)
+    }
+
+    /// Whether every point of the border of a `width` × `height` image with
+    /// a vertical field of view of `fov` degrees has a ray (the distortion
+    /// can be undone there: Newton's method converges), checked at 65
+    /// points a side. Undistortion depends on f, the principal point and
+    /// the coefficients alone, so the camera's orientation is left at the
+    /// identity.
+    pub fn covers(&self, width: u32, height: u32, fov: f64) -> bool {
+        use crate::math::V3;
+        if self.distortion.iter().all(|&k| k == 0.0) {
+            return true;
+        }
+        let (w, h) = (width as f64, height as f64);
+        let camera = crate::photo::camera::Camera {
+            f: 0.5 * h / (0.5 * fov.to_radians()).tan(),
+            c: [0.5 * (w - 1.0), 0.5 * (h - 1.0)],
+            dist: self.distortion,
+            axis: V3::new(0.0, 0.0, 1.0),
+            right: V3::new(1.0, 0.0, 0.0),
+            up: V3::new(0.0, 1.0, 0.0),
+        };
+        let n = 64;
+        (0..=n).all(|i| {
+            let t = i as f64 / n as f64;
+            [[t * w, 0.0], [t * w, h], [0.0, t * h], [w, t * h]]
+                .iter()
+                .all(|p| camera.undistort([p[0] - 0.5, p[1] - 0.5]).is_some())
+        })
+    }
 }
 
 /// Albedo of the ground.
@@ -438,6 +497,30 @@ fn check_finite3(path: &Path, field: &str, c: [f64; 3]) -> Result<DVec3> {
 
 fn positive(path: &Path, field: &str, v: f64) -> Result<f64> {
     crate::validate::positive(field, v).map_err(|e| e.in_file(path))
+}
+
+/// The `roll` and `distortion` of a camera section, checked finite.
+fn lens_of(spec: &CameraSpec, path: &Path) -> Result<Lens> {
+    let roll = spec.roll.unwrap_or(0.0);
+    if !(roll.is_finite() && roll.abs() <= 180.0) {
+        return Err(Error::input(
+            path,
+            "camera.roll",
+            format!("must be a number of degrees in [-180, 180], got {roll}"),
+        ));
+    }
+    let d = spec.distortion.unwrap_or_default();
+    let distortion = [d.k1, d.k2, d.k3, d.p1, d.p2];
+    for (name, v) in ["k1", "k2", "k3", "p1", "p2"].iter().zip(distortion) {
+        if !v.is_finite() {
+            return Err(Error::input(
+                path,
+                format!("camera.distortion.{name}"),
+                format!("must be a finite number, got {v}"),
+            ));
+        }
+    }
+    Ok(Lens { roll, distortion })
 }
 
 impl CameraSettings {
@@ -558,14 +641,25 @@ impl CameraSettings {
                 ));
             }
         }
-        Ok(CameraSettings {
+        let lens = lens_of(spec, path)?;
+        let settings = CameraSettings {
             position,
             look_at,
             up,
             vertical_fov: fov,
             width: spec.width,
             height: spec.height,
-        })
+            lens,
+        };
+        if !lens.covers(spec.width, spec.height, fov) {
+            return Err(Error::input(
+                path,
+                "camera.distortion",
+                "folds the image over: some pixel near the image's edge has no ray \
+                 (the distortion is not monotone there); use smaller coefficients",
+            ));
+        }
+        Ok(settings)
     }
 }
 

@@ -67,6 +67,13 @@ const GROWTH: f64 = 0.2;
 /// The largest exponent of P/P0 (e^600 ≈ 4e260, so P0·e^600 stays finite).
 const MAX_EXPONENT: f64 = 600.0;
 
+/// The highest pressure the table gives (Pa), some 50 km below the ground:
+/// deeper (only rays that went through the ground get there) it is held,
+/// with a zero derivative. Held higher, the formulas' P² terms overflowed and
+/// a dual number's derivative became ∞ − ∞ (the `photo` fuzz target: a ray
+/// launched straight down ended 2,000 km underground with a NaN Jacobian).
+const MAX_PRESSURE: f64 = 1e8;
+
 /// Gauss–Legendre abscissae (positive half) and weights, 8 points on [−1, 1].
 const GL_X: [f64; 4] = [
     0.183_434_642_495_649_8,
@@ -237,9 +244,10 @@ impl<U: Real> Hydrostatic<U> {
             (i0 + t * (d0 + t * (c2 + t * c3)), kelvin_at_h.recip())
         };
         let exponent = integral * (-K);
-        if exponent.val() > MAX_EXPONENT {
-            // Thousands of kilometres below the ground: held, not overflowing.
-            return (self.p0 * MAX_EXPONENT.exp(), U::cst(0.0));
+        let limit = (MAX_PRESSURE / self.p0.val()).ln().min(MAX_EXPONENT);
+        if exponent.val() > limit {
+            // Tens of kilometres below the ground: held, not overflowing.
+            return (U::cst(self.p0.val() * limit.exp()), U::cst(0.0));
         }
         let p = self.p0 * exponent.exp();
         (p, p * inv_t * (-K))
