@@ -4,7 +4,7 @@
 //! measured table, one humidity or a table, the three formulas, hydrostatic
 //! or constant pressure, over the flat ground and the round earth. At random
 //! heights, wherever the profile answers: |δ̃ − δ| ≤ 1e-12·|δ| and
-//! |∇δ̃ − ∇δ| ≤ 1e-12·max(|∇δ|, |δ|/10 km).
+//! |∇δ̃ − ∇δ| ≤ 1e-12·max(|∇δ|, |δ|/1 km).
 
 use mirage::math::V3;
 use mirage::medium::compiled::{BOUND, SLOPE_SCALE};
@@ -111,8 +111,9 @@ fn norm(v: V3) -> f64 {
 
 #[test]
 fn the_compiled_profile_is_the_formula_to_1e_12_over_random_media() {
-    let mut rng = Rng(0x5eed_41);
+    let mut rng = Rng(0x005e_ed41);
     let (mut answered, mut media) = (0usize, 0usize);
+    let (mut most_pieces, mut most_exact) = (0usize, 0usize);
     while media < 48 {
         let json = random_air(&mut rng);
         let medium: Medium = serde_json::from_str(&json).unwrap_or_else(|e| panic!("{e}: {json}"));
@@ -132,6 +133,16 @@ fn the_compiled_profile_is_the_formula_to_1e_12_over_random_media() {
         // saturation pressure's step at 0 °C) is left to the formula, and
         // there the bound holds by itself.
         assert!(pieces > exact, "{pieces} pieces, {exact} exact: {json}");
+        // Every kink is a knot (the US 1976 layers, the tables' rows, 0 °C):
+        // a few hundred pieces, at most two left to the formula (four without
+        // the 0 °C knots).
+        assert!(
+            pieces < 1000 && exact <= 2,
+            "{pieces} pieces, {exact} left to the formula at {:?}: {json}",
+            profile.formula_spans()
+        );
+        most_pieces = most_pieces.max(pieces);
+        most_exact = most_exact.max(exact);
         let formula = field.clone().without_profile();
         let round = rng.coin();
         let radius = if round { 6_371_000.0 } else { 0.0 };
@@ -172,6 +183,10 @@ fn the_compiled_profile_is_the_formula_to_1e_12_over_random_media() {
         }
     }
     // Most heights are the profile's (not the formula's fallback).
+    println!(
+        "{media} media: {answered} of {} heights answered by the profile; at most {most_pieces} pieces, {most_exact} left to the formula",
+        media * 400
+    );
     assert!(answered > 48 * 400 / 2, "{answered}");
 }
 

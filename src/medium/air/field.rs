@@ -574,10 +574,53 @@ fn compile<T: Real>(field: &AirField<T>, m: &AirMedium<T>) -> Option<CompiledPro
         breaks.extend(rows.iter().map(|r| r[0].val()));
     }
     let hi = air.top.min(air.ceiling);
+    breaks.extend(freezing_heights(air, TABLE_BOTTOM, hi));
     Some(CompiledProfile::compile(TABLE_BOTTOM, hi, &breaks, |h| {
         let (d, g) = air.formula_delta_gradient(V3::new(0.0, h, 0.0));
         (d, g.y)
     }))
+}
+
+/// The heights in [lo, hi] where the air's temperature crosses 0 °C: the
+/// saturation vapour pressure switches there from water to ice
+/// (`humidity.rs`), a small step in δ that a compiled piece must not span.
+/// Sampled every 5 m, each sign change bisected to the last bit; a layer
+/// thinner than 5 m that dips below 0 °C and back is left to the
+/// compile's own bisection (its piece is then left to the formula).
+fn freezing_heights(air: &AirField<f64>, lo: f64, hi: f64) -> Vec<f64> {
+    let above = |h: f64| air.kelvin(V3::new(0.0, h, 0.0)).0 >= KELVIN;
+    let mut out = Vec::new();
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return out;
+    }
+    let n = ((hi - lo) / 5.0).ceil().min(1e6) as usize;
+    let mut a = lo;
+    let mut sa = above(a);
+    for k in 1..=n {
+        let b = if k == n {
+            hi
+        } else {
+            lo + (hi - lo) * k as f64 / n as f64
+        };
+        let sb = above(b);
+        if sa != sb {
+            let (mut x, mut y) = (a, b);
+            for _ in 0..200 {
+                let m = 0.5 * (x + y);
+                if m <= x || m >= y {
+                    break;
+                }
+                if above(m) == sa {
+                    x = m;
+                } else {
+                    y = m;
+                }
+            }
+            out.push(y);
+        }
+        (a, sa) = (b, sb);
+    }
+    out
 }
 
 /// The thin layers' zones (see [`AirField::step_limit`]).
