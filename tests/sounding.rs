@@ -402,9 +402,25 @@ fn a_constant_humidity_table_is_the_plain_number() {
             let p = V3::new(3.0, y, 40.0);
             let (dp, gp) = fp.delta_gradient(p);
             let (dt, gt) = ft.delta_gradient(p);
-            assert!((dp - dt).abs() <= 1e-15 * dp, "{formula} {y}: {dp} vs {dt}");
+            // Each field is its compiled profile (medium::compiled), within
+            // 1e-12 of the same formula: the table's rows are extra knots,
+            // so the two profiles differ at that level, not at rounding.
+            // The formulas themselves agree to rounding.
+            if let (mirage::medium::Field::Air(a), mirage::medium::Field::Air(b)) = (&fp, &ft) {
+                let (da, _) = a.formula_delta_gradient(p);
+                let (db, _) = b.formula_delta_gradient(p);
+                assert!((da - db).abs() <= 1e-15 * da, "{formula} {y}: {da} vs {db}");
+            } else {
+                panic!("real air has an air field");
+            }
+            let bound = mirage::medium::compiled::BOUND;
+            let floor = dp / mirage::medium::compiled::SLOPE_SCALE;
             assert!(
-                (gp - gt).norm() <= 1e-14 * gp.norm() + 1e-22,
+                (dp - dt).abs() <= 2.0 * bound * dp,
+                "{formula} {y}: {dp} vs {dt}"
+            );
+            assert!(
+                (gp - gt).norm() <= 2.0 * bound * gp.norm().max(floor),
                 "{formula} {y}: {gp:?} vs {gt:?}"
             );
         }

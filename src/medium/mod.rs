@@ -13,6 +13,7 @@
 
 pub mod air;
 pub mod analytic;
+pub mod compiled;
 pub mod cull;
 pub mod dispersion;
 mod envelope;

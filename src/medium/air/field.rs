@@ -34,7 +34,9 @@ use super::refractivity::{
 use super::standard::{US1976_BREAKS, US1976_TOP, us1976_offset};
 use crate::math::{Real, V3, sigmoid};
 use crate::medium::IndexField;
+use crate::medium::compiled::CompiledProfile;
 use crate::medium::rim::rim_weight;
+use std::sync::Arc;
 
 /// 0 °C in kelvins.
 pub const KELVIN: f64 = 273.15;
@@ -153,6 +155,9 @@ pub struct AirField<T = f64> {
     /// The thin layers as height zones `(lo, hi, scale)`: outside them the
     /// layer's share of T is below 1e-13 of its amplitude.
     zones: Vec<(f64, f64, f64)>,
+    /// δ(h) and dδ/dh compiled (`medium::compiled`): plain `f64` air without
+    /// hot spots only (see [`AirField::profile`]).
+    compiled: Option<Arc<CompiledProfile>>,
 }
 
 /// How many scales a layer's zone reaches (e^(−30) ≈ 1e-13).
@@ -207,7 +212,7 @@ impl<T: Real> AirField<T> {
             .collect();
         let ceiling = ceiling(&profile, &hotspots);
         let zones = zones(m);
-        AirField {
+        let mut field = AirField {
             profile,
             pressure,
             formula: m.air.refractivity,
@@ -224,7 +229,28 @@ impl<T: Real> AirField<T> {
             ceiling,
             top,
             zones,
-        }
+            compiled: None,
+        };
+        field.compiled = compile(&field, m).map(Arc::new);
+        field
+    }
+
+    /// The compiled profile of δ(h) and dδ/dh, which
+    /// [`IndexField::delta_gradient`] answers from wherever it covers: built
+    /// for plain `f64` air without hot spots (the value paths: traces,
+    /// renders, a fit's residuals). Dual numbers (a fit's exact Jacobian)
+    /// always evaluate the formula, so the derivatives in every parameter
+    /// are the formula's own, exactly; compiling them too would multiply
+    /// the compile's work by the parameter count at every fit iteration.
+    pub fn profile(&self) -> Option<&CompiledProfile> {
+        self.compiled.as_deref()
+    }
+
+    /// The same air without its compiled profile: every evaluation by the
+    /// formula.
+    pub fn without_profile(mut self) -> Self {
+        self.compiled = None;
+        self
     }
 
     /// The height (m) above which the air is colder than −150 °C somewhere
@@ -404,12 +430,27 @@ impl<T: Real> AirField<T> {
     }
 }
 
-impl<T: Real> IndexField<T> for AirField<T> {
+impl<T: Real> AirField<T> {
+    /// δ and ∇δ by the formula, never the compiled profile.
     #[inline]
-    fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
+    pub fn formula_delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
         let (t, grad_t) = self.kelvin(p);
         let (pressure, dp_dh) = self.pressure(p.y);
         self.index_at(p.y, t, grad_t, pressure, dp_dh)
+    }
+}
+
+impl<T: Real> IndexField<T> for AirField<T> {
+    #[inline]
+    fn delta_gradient(&self, p: V3<T>) -> (T, V3<T>) {
+        // Only `f64` air has a profile: T is f64 here, and `cst` exact.
+        if let Some(c) = &self.compiled
+            && let Some((d, g)) = c.eval(p.y.val())
+        {
+            let z = T::cst(0.0);
+            return (T::cst(d), V3::new(z, T::cst(g), z));
+        }
+        self.formula_delta_gradient(p)
     }
 
     fn is_stratified(&self) -> bool {
@@ -508,6 +549,78 @@ impl AirField<f64> {
             zone_step_scales: ZONE_STEP_SCALES,
         }
     }
+}
+
+/// The compiled profile of `field` (see [`AirField::profile`]): `None` for
+/// dual numbers and for air with hot spots. It covers the hydrostatic
+/// table's bottom up to the top of the described air or the ceiling,
+/// whichever is lower, with knots where the formula is not smooth: the
+/// ground, the table's ends, the US 1976 layers' kinks and the rows of the
+/// temperature and humidity tables.
+fn compile<T: Real>(field: &AirField<T>, m: &AirMedium<T>) -> Option<CompiledProfile> {
+    let air = (field as &dyn std::any::Any).downcast_ref::<AirField<f64>>()?;
+    if !air.hotspots.is_empty() {
+        return None;
+    }
+    let t = &m.air.temperature;
+    let mut breaks = vec![0.0, TABLE_BOTTOM, air.top];
+    if let Some(Lapse::Standard) = t.lapse {
+        breaks.extend(US1976_BREAKS);
+    }
+    if let Some(rows) = &t.table {
+        breaks.extend(rows.iter().map(|r| r[0].val()));
+    }
+    if let Some(rows) = m.air.humidity.table() {
+        breaks.extend(rows.iter().map(|r| r[0].val()));
+    }
+    let hi = air.top.min(air.ceiling);
+    breaks.extend(freezing_heights(air, TABLE_BOTTOM, hi));
+    Some(CompiledProfile::compile(TABLE_BOTTOM, hi, &breaks, |h| {
+        let (d, g) = air.formula_delta_gradient(V3::new(0.0, h, 0.0));
+        (d, g.y)
+    }))
+}
+
+/// The heights in [lo, hi] where the air's temperature crosses 0 °C: the
+/// saturation vapour pressure switches there from water to ice
+/// (`humidity.rs`), a small step in δ that a compiled piece must not span.
+/// Sampled every 5 m, each sign change bisected to the last bit; a layer
+/// thinner than 5 m that dips below 0 °C and back is left to the
+/// compile's own bisection (its piece is then left to the formula).
+fn freezing_heights(air: &AirField<f64>, lo: f64, hi: f64) -> Vec<f64> {
+    let above = |h: f64| air.kelvin(V3::new(0.0, h, 0.0)).0 >= KELVIN;
+    let mut out = Vec::new();
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return out;
+    }
+    let n = ((hi - lo) / 5.0).ceil().min(1e6) as usize;
+    let mut a = lo;
+    let mut sa = above(a);
+    for k in 1..=n {
+        let b = if k == n {
+            hi
+        } else {
+            lo + (hi - lo) * k as f64 / n as f64
+        };
+        let sb = above(b);
+        if sa != sb {
+            let (mut x, mut y) = (a, b);
+            for _ in 0..200 {
+                let m = 0.5 * (x + y);
+                if m <= x || m >= y {
+                    break;
+                }
+                if above(m) == sa {
+                    x = m;
+                } else {
+                    y = m;
+                }
+            }
+            out.push(y);
+        }
+        (a, sa) = (b, sb);
+    }
+    out
 }
 
 /// The thin layers' zones (see [`AirField::step_limit`]).

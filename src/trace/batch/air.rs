@@ -12,6 +12,13 @@
 //!    partials go through nested dual numbers, which have no lane form; a
 //!    humidity table is evaluated at the lane's height there).
 //!
+//! Air without hot spots has a compiled profile of δ(h) and dδ/dh
+//! (`medium::compiled`, [`AirField::profile`]): then every lane looks up its
+//! piece and evaluates its two polynomials by Horner's rule, lane-wise, as
+//! the scalar `AirField::delta_gradient` does (fused or not: the same
+//! rounding up to 1 ulp per step); the lanes the profile leaves to the
+//! formula (outside its range, at a knot) take stages 1–4 above.
+//!
 //! Where a stage runs per lane it runs the scalar code itself, so the lanes
 //! and the scalar tracer differ only by the exponential (≤ 1 ulp) and fused
 //! multiply–adds; `tests/fast_paths.rs` checks the endpoints.
@@ -27,12 +34,17 @@ use crate::medium::air::refractivity::STANDARD_PRESSURE;
 use crate::medium::air::standard::us1976_offset;
 use crate::medium::air::{AirField, COLDEST, HOTTEST, KELVIN, Lapse};
 use crate::medium::air::{LaneTerms, UniformTerms};
+use crate::medium::compiled::{CompiledProfile, DEGREE, Piece};
 use crate::trace::fastexp::{exp_core, fmadd, sigmoid};
 
 /// Real air in lanes: the compiled field and its terms as plain numbers.
 pub(crate) struct AirLanes<'a> {
     field: &'a AirField,
     t: LaneTerms,
+    /// The compiled profile, if the air has one.
+    profile: Option<&'a CompiledProfile>,
+    /// A piece for the lanes the profile leaves to the formula.
+    zero: Piece,
 }
 
 impl<'a> AirLanes<'a> {
@@ -40,7 +52,67 @@ impl<'a> AirLanes<'a> {
         AirLanes {
             field,
             t: field.lane_terms(),
+            profile: field.profile(),
+            zero: Piece {
+                mid: 0.0,
+                inv_half: 0.0,
+                value: [0.0; DEGREE + 1],
+                slope: [0.0; DEGREE + 1],
+            },
         }
+    }
+
+    /// δ and dδ/dh at heights `y` from the compiled profile; `hit[i]` false
+    /// where it leaves lane i to the formula (its outputs are then 0).
+    /// Whether every lane was answered.
+    #[inline(always)]
+    fn compiled<const N: usize, const FMA: bool>(
+        &self,
+        profile: &CompiledProfile,
+        y: &[f64; N],
+        d: &mut [f64; N],
+        gy: &mut [f64; N],
+        hit: &mut [bool; N],
+    ) -> bool {
+        let mut pieces = [&self.zero; N];
+        let mut t = [0.0; N];
+        let mut all = true;
+        for i in 0..N {
+            if let Some(p) = profile.locate(y[i]) {
+                pieces[i] = p;
+                t[i] = (y[i] - p.mid) * p.inv_half;
+                hit[i] = true;
+            } else {
+                hit[i] = false;
+                all = false;
+            }
+        }
+        for i in 0..N {
+            d[i] = pieces[i].value[DEGREE];
+            gy[i] = pieces[i].slope[DEGREE];
+        }
+        for k in (0..DEGREE).rev() {
+            for i in 0..N {
+                d[i] = fmadd::<FMA>(d[i], t[i], pieces[i].value[k]);
+                gy[i] = fmadd::<FMA>(gy[i], t[i], pieces[i].slope[k]);
+            }
+        }
+        all
+    }
+
+    /// δ and dδ/dy at heights `y` of stratified air by the formula's
+    /// stages.
+    #[inline(always)]
+    fn formula_layers<const N: usize, const FMA: bool>(
+        &self,
+        y: &[f64; N],
+        d: &mut [f64; N],
+        gy: &mut [f64; N],
+    ) {
+        let mut tu = [0.0; N];
+        self.uniform::<N, FMA>(y, &mut tu, gy);
+        let (mut gx, mut gz) = ([0.0; N], [0.0; N]);
+        self.finish::<N, FMA, false>(y, &tu, &tu, d, [&mut gx, gy, &mut gz]);
     }
 
     /// T_u (K) and dT_u/dh at heights `y` (stage 1).
@@ -195,10 +267,22 @@ impl LaneField for AirLanes<'_> {
         d: &mut [f64; N],
         gy: &mut [f64; N],
     ) {
-        let mut tu = [0.0; N];
-        self.uniform::<N, FMA>(y, &mut tu, gy);
-        let (mut gx, mut gz) = ([0.0; N], [0.0; N]);
-        self.finish::<N, FMA, false>(y, &tu, &tu, d, [&mut gx, gy, &mut gz]);
+        let Some(profile) = self.profile else {
+            self.formula_layers::<N, FMA>(y, d, gy);
+            return;
+        };
+        let mut hit = [true; N];
+        if self.compiled::<N, FMA>(profile, y, d, gy, &mut hit) {
+            return;
+        }
+        let (mut d2, mut g2) = ([0.0; N], [0.0; N]);
+        self.formula_layers::<N, FMA>(y, &mut d2, &mut g2);
+        for i in 0..N {
+            if !hit[i] {
+                d[i] = d2[i];
+                gy[i] = g2[i];
+            }
+        }
     }
 
     #[inline(always)]
@@ -209,6 +293,13 @@ impl LaneField for AirLanes<'_> {
         d: &mut [f64; N],
         [gx, gy, gz]: [&mut [f64; N]; 3],
     ) {
+        if self.profile.is_some() {
+            // Only air without hot spots has a profile.
+            self.layers::<N, FMA>(y, d, gy);
+            *gx = [0.0; N];
+            *gz = [0.0; N];
+            return;
+        }
         let mut tu = [0.0; N];
         self.uniform::<N, FMA>(y, &mut tu, gy);
         let mut t = tu;
